@@ -1,0 +1,282 @@
+"""The Cyborg's ROS interface: every topic, service, action and robot string in one place.
+
+Defaults follow ``shared/ROBOT_INTERFACE.md``. Operators re-wire a robot through the
+``ROBOT_TOPICS`` / ``ROBOT_SERVICES`` / ``ROBOT_ACTIONS`` settings (mappings of key to
+ROS name, filled from the ``ROBOT_NAME_OVERRIDES`` JSON environment variable), so the
+rest of the code refers to topics by *key* and never by ROS name.
+
+This module must stay importable without Django configured: the simulator and
+benchmarks use it too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from enum import StrEnum
+from functools import cache
+
+
+@dataclass(frozen=True)
+class Topic:
+    key: str
+    name: str
+    type: str
+    # Browser update rate; the link coalesces faster topics (latest value wins).
+    # ``None`` forwards every message (low-rate, event-like topics such as logs).
+    ui_rate_hz: float | None = None
+    # Subscribed by the robot link at start so the dashboard can show it.
+    monitor: bool = False
+    latched: bool = False
+
+
+@dataclass(frozen=True)
+class Service:
+    key: str
+    name: str
+    type: str
+
+
+@dataclass(frozen=True)
+class Action:
+    key: str
+    name: str  # action server namespace: <name>/goal, /cancel, /status, /feedback, /result
+    type: str  # the action type without the Action* suffixes, e.g. move_base_msgs/MoveBase
+
+
+_T = Topic
+_DEFAULT_TOPICS: tuple[Topic, ...] = (
+    # monitoring
+    _T("battery_soc", "/RosAria/battery_state_of_charge", "std_msgs/Float32", 2, True),
+    _T("battery_voltage", "/RosAria/battery_voltage", "std_msgs/Float64", 2, True),
+    _T("battery_recharge_state", "/RosAria/battery_recharge_state", "std_msgs/Int8", 2, True),
+    _T("motors_state", "/RosAria/motors_state", "std_msgs/Bool", 5, True),
+    _T("bumper_state", "/RosAria/bumper_state", "rosaria/BumperState", 5, True),
+    _T("sonar", "/RosAria/sonar", "sensor_msgs/PointCloud", 2),
+    _T("robot_pose", "/robot_pose", "geometry_msgs/Pose", 10, True),
+    _T("amcl_pose", "/amcl_pose", "geometry_msgs/PoseWithCovarianceStamped", 2),
+    _T("odom", "/odom", "nav_msgs/Odometry", 10, True),
+    _T("map", "/map", "nav_msgs/OccupancyGrid", None, True, latched=True),
+    _T("plan", "/move_base/NavfnROS/plan", "nav_msgs/Path", 2, True),
+    _T("move_base_status", "/move_base/status", "actionlib_msgs/GoalStatusArray", 2, True),
+    _T("global_costmap", "/move_base/global_costmap/costmap", "nav_msgs/OccupancyGrid"),
+    _T("local_costmap", "/move_base/local_costmap/costmap", "nav_msgs/OccupancyGrid"),
+    _T("particlecloud", "/particlecloud", "geometry_msgs/PoseArray", 1),
+    _T("state_change", "/cyborg_controller/state_change", "cyborg_controller/SystemState", None, True),
+    _T("state_transitions", "/cyborg_controller/state_transitions", "std_msgs/String", None, True),
+    _T("emotional_state", "/cyborg_controller/emotional_state", "cyborg_controller/EmotionalState", 4, True),
+    _T("emotion_system_status", "/cyborg_controller/emotional_controller_status", "std_msgs/Bool", 4, True),
+    _T("robot_mode", "/cyborg_commander/robot_mode", "std_msgs/String", None, True),
+    _T("text_to_speech", "/cyborg_audio/text_to_speech", "std_msgs/String", None, True),
+    _T("tts_feedback", "/cyborg_audio/feedback_text_to_speech", "std_msgs/String", None, True),
+    _T("playback_feedback", "/cyborg_audio/feedback_playback", "std_msgs/String", None, True),
+    _T("current_location", "/cyborg_navigation/current_location", "std_msgs/String", None, True),
+    _T("smach_status", "/controller_viewer/smach/container_status", "smach_msgs/SmachContainerStatus", 4),
+    _T("smach_structure", "/controller_viewer/smach/container_structure", "smach_msgs/SmachContainerStructure", 1),
+    _T("rosout", "/rosout", "rosgraph_msgs/Log", None, True),
+    _T("tf", "/tf", "tf2_msgs/TFMessage", 5),
+    _T("tf_static", "/tf_static", "tf2_msgs/TFMessage", None, latched=True),
+    _T("client_count", "/client_count", "std_msgs/Int32", None, latched=True),
+    # commands (the robot subscribes to these)
+    _T("register_event", "/cyborg_controller/register_event", "std_msgs/String"),
+    _T("emotional_controller", "/cyborg_controller/emotional_controller", "std_msgs/String"),
+    _T("set_emotional_state", "/cyborg_controller/set_emotional_state", "std_msgs/String"),
+    _T("emotional_feedback", "/cyborg_controller/emotional_feedback", "cyborg_controller/EmotionalFeedback"),
+    _T("playback", "/cyborg_audio/playback", "std_msgs/String"),
+    _T("domecontrol", "/cyborg_visual/domecontrol", "std_msgs/String"),
+    _T("cmd_vel", "/cmd_vel", "geometry_msgs/Twist"),
+    _T("move_base_simple_goal", "/move_base_simple/goal", "geometry_msgs/PoseStamped"),
+    _T("initialpose", "/initialpose", "geometry_msgs/PoseWithCovarianceStamped"),
+)
+
+_DEFAULT_SERVICES: tuple[Service, ...] = (
+    Service("enable_motors", "/RosAria/enable_motors", "std_srvs/Empty"),
+    Service("disable_motors", "/RosAria/disable_motors", "std_srvs/Empty"),
+    Service("get_emotional_state", "/get_emotional_state", "cyborg_controller/EmotionalStateService"),
+    Service("rosapi_topics", "/rosapi/topics", "rosapi/Topics"),
+    Service("rosapi_topic_type", "/rosapi/topic_type", "rosapi/TopicType"),
+    Service("rosapi_services", "/rosapi/services", "rosapi/Services"),
+    Service("rosapi_nodes", "/rosapi/nodes", "rosapi/Nodes"),
+    Service("rosapi_get_time", "/rosapi/get_time", "rosapi/GetTime"),
+)
+
+_DEFAULT_ACTIONS: tuple[Action, ...] = (
+    Action("move_base", "/move_base", "move_base_msgs/MoveBase"),
+    Action("navigation", "/cyborg_navigation/navigation", "cyborg_navigation/Navigation"),
+)
+
+
+def _overrides(setting: str) -> dict[str, str]:
+    try:
+        from django.conf import settings
+
+        return dict(getattr(settings, setting, {}) or {})
+    except Exception:  # Django not configured: plain defaults (simulator scripts, benches)
+        return {}
+
+
+def _apply(defaults, setting):
+    names = _overrides(setting)
+    unknown = set(names) - {d.key for d in defaults}
+    if unknown:
+        raise KeyError(f"{setting} names unknown keys: {', '.join(sorted(unknown))}")
+    return {d.key: replace(d, name=names.get(d.key, d.name)) for d in defaults}
+
+
+@cache
+def _topics() -> dict[str, Topic]:
+    return _apply(_DEFAULT_TOPICS, "ROBOT_TOPICS")
+
+
+@cache
+def _services() -> dict[str, Service]:
+    return _apply(_DEFAULT_SERVICES, "ROBOT_SERVICES")
+
+
+@cache
+def _actions() -> dict[str, Action]:
+    return _apply(_DEFAULT_ACTIONS, "ROBOT_ACTIONS")
+
+
+def reload() -> None:
+    """Forget cached names (tests that override the settings call this)."""
+    for f in (_topics, _services, _actions):
+        f.cache_clear()
+
+
+def topic(key: str) -> Topic:
+    return _topics()[key]
+
+
+def topics() -> tuple[Topic, ...]:
+    return tuple(_topics().values())
+
+
+def monitored_topics() -> tuple[Topic, ...]:
+    return tuple(t for t in _topics().values() if t.monitor)
+
+
+def topic_by_name(name: str) -> Topic | None:
+    return next((t for t in _topics().values() if t.name == name), None)
+
+
+def service(key: str) -> Service:
+    return _services()[key]
+
+
+def services() -> tuple[Service, ...]:
+    return tuple(_services().values())
+
+
+def action(key: str) -> Action:
+    return _actions()[key]
+
+
+def actions() -> tuple[Action, ...]:
+    return tuple(_actions().values())
+
+
+# --- Robot strings -------------------------------------------------------------------
+
+
+class Mode(StrEnum):
+    """Operating modes; the value is the string the robot's commander expects."""
+
+    BEHAVIOUR = "behaviour"
+    DEMO = "demo"
+    MANUAL = "manual control"
+    STOP = "stop"
+
+    @property
+    def short(self) -> str:
+        """The API/UI name (``manual`` rather than ``manual control``)."""
+        return self.value.split()[0]
+
+    @classmethod
+    def from_short(cls, name: str) -> Mode:
+        for mode in cls:
+            if name in (mode.short, mode.value):
+                return mode
+        raise ValueError(name)
+
+
+class Event(StrEnum):
+    ABORTED = "aborted"
+    SUCCEEDED = "succeeded"
+    PREEMPTED = "preempted"
+    BEHAVIOUR_START = "behaviour_start"
+    DEMO_START = "demo_start"
+    MANUAL_START = "manual_start"
+    SUSPEND = "suspend"
+    RESTART = "restart"
+
+
+class State(StrEnum):
+    STARTUP = "startup"
+    SUSPENSION = "suspension"
+    DEMO = "demo"
+    MANUAL = "manual"
+    BEHAVIOUR = "behaviour"
+    IDLE = "idle"
+
+
+EMOTION_SYSTEM_ON = "ON"
+EMOTION_SYSTEM_OFF = "OFF"
+MAP_FRAME = "map"
+
+# Commander sequences (ROBOT_INTERFACE.md, "Modes of operation"): each step is
+# ("event", name) | ("emotion_system", bool) | ("pause", seconds).
+COMMANDER_PAUSE_S = 0.5
+Step = tuple[str, str | bool | float]
+COMMANDER_SEQUENCES: dict[Mode, tuple[Step, ...]] = {
+    Mode.BEHAVIOUR: (
+        ("event", Event.ABORTED), ("pause", COMMANDER_PAUSE_S),
+        ("emotion_system", True), ("event", Event.BEHAVIOUR_START),
+    ),
+    Mode.DEMO: (
+        ("event", Event.ABORTED), ("pause", COMMANDER_PAUSE_S),
+        ("emotion_system", False), ("event", Event.DEMO_START),
+    ),
+    Mode.MANUAL: (
+        ("event", Event.ABORTED), ("pause", COMMANDER_PAUSE_S),
+        ("emotion_system", False), ("event", Event.MANUAL_START),
+    ),
+    Mode.STOP: (
+        ("emotion_system", False), ("event", Event.ABORTED),
+        ("pause", COMMANDER_PAUSE_S), ("event", Event.SUSPEND),
+    ),
+}
+# The state each mode should reach, for the requested-vs-reached check.
+MODE_TARGET_STATE: dict[Mode, State] = {
+    Mode.BEHAVIOUR: State.BEHAVIOUR,
+    Mode.DEMO: State.DEMO,
+    Mode.MANUAL: State.MANUAL,
+    Mode.STOP: State.SUSPENSION,
+}
+
+# Emotion presets (PAD, each in -1..1); the admin's EmotionPreset table is seeded from these.
+EMOTION_PRESETS: dict[str, tuple[float, float, float]] = {
+    "angry": (-0.51, 0.59, 0.25),
+    "bored": (-0.65, -0.62, -0.33),
+    "curious": (0.22, 0.62, -0.10),
+    "dignified": (0.55, 0.22, 0.61),
+    "elated": (0.50, 0.42, 0.23),
+    "inhibited": (-0.54, -0.04, -0.41),
+    "puzzled": (-0.41, 0.48, -0.33),
+    "loved": (0.89, 0.54, -0.18),
+    "unconcerned": (-0.13, -0.41, 0.08),
+    "hungry": (-0.44, 0.14, -0.21),
+    "sleepy": (0.20, -0.70, -0.44),
+}
+
+NAVIGATION_ORDERS = ("navigation_go_to", "navigation_wander", "navigation_dock")
+
+LOG_LEVELS: dict[int, str] = {1: "DEBUG", 2: "INFO", 4: "WARN", 8: "ERROR", 16: "FATAL"}
+
+RECHARGE_STATES: dict[int, str] = {
+    -1: "unknown", 0: "not charging", 1: "bulk", 2: "overcharge", 3: "float", 4: "balance",
+}
+
+GOAL_STATUS: dict[int, str] = {
+    0: "pending", 1: "active", 2: "preempted", 3: "succeeded", 4: "aborted",
+    5: "rejected", 6: "preempting", 7: "recalling", 8: "recalled", 9: "lost",
+}
