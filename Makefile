@@ -1,0 +1,44 @@
+# Two commands for a fresh machine:  make run  and  make test.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+PORT ?= 8000
+SIM_PORT ?= 9090
+VIDEO_PORT ?= 8080
+STAMP := $(VENV)/.installed
+
+.PHONY: run test install browser lint bench clean
+
+$(STAMP): pyproject.toml
+	$(PY) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[dev]'
+	touch $(STAMP)
+
+install: $(STAMP)
+
+# Debian's Chromium for the browser tests (Playwright drives it through executablePath).
+browser:
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq chromium; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq chromium; fi; }
+
+run: install
+	$(BIN)/python manage.py migrate --noinput
+	$(BIN)/python manage.py bootstrap
+	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT); open http://127.0.0.1:$(PORT)/"
+	@trap 'kill 0' INT TERM EXIT; \
+	$(BIN)/python manage.py simrobot --port $(SIM_PORT) --video-port $(VIDEO_PORT) & \
+	$(BIN)/daphne -b 127.0.0.1 -p $(PORT) cyborg_site.asgi:application
+
+test: install browser
+	bash scripts/test.sh
+
+lint: install
+	$(BIN)/ruff check .
+
+bench: install
+	for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b; done
+
+clean:
+	rm -rf $(VENV) var .pytest_cache

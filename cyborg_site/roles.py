@@ -1,0 +1,38 @@
+"""The three roles: viewers watch, operators command and drive, admins also configure."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Any
+
+
+class Role(StrEnum):
+    VIEWER = "viewer"
+    OPERATOR = "operator"
+    ADMIN = "admin"
+
+
+def _groups(user: Any) -> set[str]:
+    cached = getattr(user, "_role_groups", None)
+    if cached is None:
+        cached = set(user.groups.values_list("name", flat=True)) if user.is_authenticated else set()
+        user._role_groups = cached
+    return cached
+
+
+def is_admin(user: Any) -> bool:
+    return bool(user and user.is_authenticated and (user.is_superuser or Role.ADMIN in _groups(user)))
+
+
+def is_operator(user: Any) -> bool:
+    return is_admin(user) or bool(user and user.is_authenticated and Role.OPERATOR in _groups(user))
+
+
+def role_of(user: Any) -> Role | None:
+    if is_admin(user):
+        return Role.ADMIN
+    if is_operator(user):
+        return Role.OPERATOR
+    if user and user.is_authenticated:
+        return Role.VIEWER
+    return None

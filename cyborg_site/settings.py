@@ -1,0 +1,202 @@
+"""Every setting comes from the environment (see README, "Configuration")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import dj_database_url
+
+from cyborg_site.env import (
+    env_bool,
+    env_choice,
+    env_float,
+    env_int,
+    env_json_dict,
+    env_list,
+    env_str,
+)
+
+BASE_DIR = Path(__file__).resolve().parent.parent
+VAR_DIR = Path(env_str("VAR_DIR", str(BASE_DIR / "var")))
+
+DEBUG = env_bool("DEBUG", False)
+SECRET_KEY = env_str("SECRET_KEY") or ("insecure-dev-key-only-for-local-use" if DEBUG else "")
+if not SECRET_KEY:
+    # Local runs without DEBUG still get a stable key, kept beside the database.
+    _key_file = VAR_DIR / "secret_key"
+    if not _key_file.exists():
+        import secrets
+
+        VAR_DIR.mkdir(parents=True, exist_ok=True)
+        _key_file.write_text(secrets.token_urlsafe(50))
+    SECRET_KEY = _key_file.read_text().strip()
+ALLOWED_HOSTS = env_list("ALLOWED_HOSTS", ["127.0.0.1", "localhost", "[::1]"])
+CSRF_TRUSTED_ORIGINS = env_list("CSRF_TRUSTED_ORIGINS", [])
+
+INSTALLED_APPS = [
+    "daphne",
+    "django.contrib.admin",
+    "django.contrib.auth",
+    "django.contrib.contenttypes",
+    "django.contrib.sessions",
+    "django.contrib.messages",
+    "django.contrib.staticfiles",
+    "channels",
+    "rest_framework",
+    "rest_framework.authtoken",
+    "drf_spectacular",
+    "drf_spectacular_sidecar",
+    "robot",
+    "dashboard",
+    "history",
+]
+
+MIDDLEWARE = [
+    "django.middleware.security.SecurityMiddleware",
+    "whitenoise.middleware.WhiteNoiseMiddleware",
+    "django.contrib.sessions.middleware.SessionMiddleware",
+    "django.middleware.common.CommonMiddleware",
+    "django.middleware.csrf.CsrfViewMiddleware",
+    "django.contrib.auth.middleware.AuthenticationMiddleware",
+    "django.contrib.messages.middleware.MessageMiddleware",
+    "django.middleware.clickjacking.XFrameOptionsMiddleware",
+    "dashboard.middleware.LoginRequiredMiddleware",
+]
+
+ROOT_URLCONF = "cyborg_site.urls"
+ASGI_APPLICATION = "cyborg_site.asgi.application"
+WSGI_APPLICATION = None
+
+TEMPLATES = [
+    {
+        "BACKEND": "django.template.backends.django.DjangoTemplates",
+        "DIRS": [BASE_DIR / "templates"],
+        "APP_DIRS": True,
+        "OPTIONS": {
+            "context_processors": [
+                "django.template.context_processors.request",
+                "django.contrib.auth.context_processors.auth",
+                "django.contrib.messages.context_processors.messages",
+                "dashboard.context_processors.roles",
+            ],
+        },
+    },
+]
+
+DATABASES = {
+    "default": dj_database_url.parse(
+        env_str("DATABASE_URL", f"sqlite:///{VAR_DIR / 'db.sqlite3'}"),
+        conn_max_age=env_int("DATABASE_CONN_MAX_AGE", 0, minimum=0),
+    )
+}
+if DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
+    # WAL lets the recorder write while pages read; a busy timeout instead of "database is locked".
+    DATABASES["default"].setdefault("OPTIONS", {}).update(
+        {"timeout": 20, "init_command": "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;"}
+    )
+DEFAULT_AUTO_FIELD = "django.db.models.BigAutoField"
+
+AUTH_PASSWORD_VALIDATORS = [
+    {"NAME": "django.contrib.auth.password_validation.MinimumLengthValidator"},
+]
+LOGIN_URL = "login"
+LOGIN_REDIRECT_URL = "dashboard:home"
+LOGOUT_REDIRECT_URL = "login"
+
+LANGUAGE_CODE = "en-gb"
+TIME_ZONE = env_str("TIME_ZONE", "Europe/Oslo")
+USE_I18N = True
+USE_TZ = True
+
+STATIC_URL = "static/"
+STATICFILES_DIRS = [BASE_DIR / "static"]
+STATIC_ROOT = VAR_DIR / "staticfiles"
+
+# --- Redis: channel layer, Celery broker, latest-state store ---------------------------
+REDIS_URL = env_str("REDIS_URL")
+EMBEDDED = not REDIS_URL  # one process hosts the web server, the robot link and the sampling loop
+if REDIS_URL:
+    CHANNEL_LAYERS = {
+        "default": {
+            "BACKEND": "channels_redis.core.RedisChannelLayer",
+            "CONFIG": {
+                "hosts": [REDIS_URL],
+                "prefix": env_str("CHANNEL_LAYER_PREFIX", "cyborg"),
+                "capacity": 200,
+                "expiry": 10,
+            },
+        }
+    }
+else:
+    CHANNEL_LAYERS = {"default": {"BACKEND": "channels.layers.InMemoryChannelLayer", "CONFIG": {"capacity": 200}}}
+
+CELERY_BROKER_URL = REDIS_URL or "memory://"
+CELERY_RESULT_BACKEND = REDIS_URL or None
+CELERY_TASK_ALWAYS_EAGER = False
+CELERY_TASK_IGNORE_RESULT = True
+CELERY_TIMEZONE = "UTC"
+CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
+
+# --- The robot -------------------------------------------------------------------------
+ROSBRIDGE_URL = env_str("ROSBRIDGE_URL", "ws://127.0.0.1:9090")
+VIDEO_URL = env_str("VIDEO_URL", "http://127.0.0.1:8080")
+VIDEO_TOPIC = env_str("VIDEO_TOPIC", "/videostream")
+# Re-wiring: {"topics": {"cmd_vel": "/RosAria/cmd_vel"}, "services": {...}, "actions": {...}}
+_names = env_json_dict("ROBOT_NAME_OVERRIDES")
+ROBOT_TOPICS: dict[str, str] = _names.get("topics", {})
+ROBOT_SERVICES: dict[str, str] = _names.get("services", {})
+ROBOT_ACTIONS: dict[str, str] = _names.get("actions", {})
+ROBOT_LINK_MAX_BACKOFF_S = env_float("ROBOT_LINK_MAX_BACKOFF_S", 10.0, minimum=0.5)
+ROBOT_REQUEST_TIMEOUT_S = env_float("ROBOT_REQUEST_TIMEOUT_S", 5.0, minimum=0.1)
+# Values older than this are shown as stale (greyed) on the pages.
+STALE_AFTER_S = env_float("STALE_AFTER_S", 10.0, minimum=0.5)
+BATTERY_LOW_PERCENT = env_float("BATTERY_LOW_PERCENT", 20.0, minimum=0)
+# Embedded default: host the link inside the Daphne process (off only for special setups).
+ROBOT_LINK_EMBEDDED = env_bool("ROBOT_LINK_EMBEDDED", True)
+
+# --- Commanding (issue 4) --------------------------------------------------------------
+MODE_COMMANDER = env_choice("MODE_COMMANDER", "server", ("server", "robot"))
+COMMAND_THROTTLE_RATE = env_str("COMMAND_THROTTLE_RATE", "120/min")
+
+# --- Map and navigation (issue 5) ------------------------------------------------------
+NAVIGATION_BACKEND = env_choice("NAVIGATION_BACKEND", "move_base", ("move_base", "cyborg_navigation"))
+
+# --- Teleop and video (issue 6) --------------------------------------------------------
+TELEOP_RATE_HZ = env_float("TELEOP_RATE_HZ", 10.0, minimum=1)
+TELEOP_DEADMAN_S = env_float("TELEOP_DEADMAN_S", 0.5, minimum=0.05)
+TELEOP_MAX_LINEAR = env_float("TELEOP_MAX_LINEAR", 0.5, minimum=0)
+TELEOP_MAX_ANGULAR = env_float("TELEOP_MAX_ANGULAR", 1.0, minimum=0)
+
+# --- History (issue 7) -----------------------------------------------------------------
+HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)
+
+# --- API -------------------------------------------------------------------------------
+REST_FRAMEWORK = {
+    "DEFAULT_AUTHENTICATION_CLASSES": [
+        "rest_framework.authentication.SessionAuthentication",
+        "rest_framework.authentication.TokenAuthentication",
+    ],
+    "DEFAULT_PERMISSION_CLASSES": ["rest_framework.permissions.IsAuthenticated"],
+    "DEFAULT_SCHEMA_CLASS": "drf_spectacular.openapi.AutoSchema",
+    "DEFAULT_THROTTLE_RATES": {"commands": COMMAND_THROTTLE_RATE},
+}
+SPECTACULAR_SETTINGS = {
+    "TITLE": "Cyborg Commander API",
+    "DESCRIPTION": "Monitor and command the NTNU Cyborg robot.",
+    "VERSION": "1.0.0",
+    "SERVE_INCLUDE_SCHEMA": False,
+    "SWAGGER_UI_DIST": "SIDECAR",
+    "SWAGGER_UI_FAVICON_HREF": "SIDECAR",
+    "REDOC_DIST": "SIDECAR",
+}
+
+TEST_RUNNER = "cyborg_site.test_runner.PytestTestRunner"
+
+LOGGING = {
+    "version": 1,
+    "disable_existing_loggers": False,
+    "formatters": {"plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"}},
+    "handlers": {"console": {"class": "logging.StreamHandler", "formatter": "plain"}},
+    "root": {"handlers": ["console"], "level": env_str("LOG_LEVEL", "INFO")},
+    "loggers": {"roslibpy": {"level": "WARNING"}, "daphne": {"level": "WARNING"}},
+}

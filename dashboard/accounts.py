@@ -1,0 +1,31 @@
+"""Role groups and user creation, shared by migrations hooks, commands and tests."""
+
+from __future__ import annotations
+
+import secrets
+
+from django.contrib.auth.models import Group, Permission, User
+
+from cyborg_site.roles import Role
+
+# Admins manage users and the robot's configuration in the Django admin.
+_ADMIN_APPS = ("auth", "robot", "history", "authtoken")
+
+
+def ensure_role_groups() -> dict[Role, Group]:
+    groups = {role: Group.objects.get_or_create(name=role.value)[0] for role in Role}
+    groups[Role.ADMIN].permissions.set(Permission.objects.filter(content_type__app_label__in=_ADMIN_APPS))
+    return groups
+
+
+def create_user(username: str, role: Role, *, password: str | None = None, email: str = "") -> tuple[User, str]:
+    """Create (or reset) ``username`` with ``role``; returns the user and the password."""
+    password = password or secrets.token_urlsafe(12)
+    groups = ensure_role_groups()
+    user, _ = User.objects.get_or_create(username=username, defaults={"email": email})
+    user.set_password(password)
+    user.is_staff = role == Role.ADMIN
+    user.is_superuser = role == Role.ADMIN
+    user.save()
+    user.groups.set([groups[role]])
+    return user, password

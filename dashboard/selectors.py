@@ -1,0 +1,29 @@
+"""Read-only data the dashboard pages need."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from django.conf import settings
+
+from robot import interface as ri
+
+# What the dashboard home watches live.
+HOME_KEYS = (
+    "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
+    "state_change", "state_transitions", "emotional_state", "emotion_system_status",
+    "text_to_speech", "tts_feedback", "current_location", "rosout", "robot_pose",
+)
+
+
+def dashboard_context() -> dict[str, Any]:
+    return {
+        "live_config": {
+            "keys": list(HOME_KEYS),
+            "stale_after_s": settings.STALE_AFTER_S,
+            "battery_low_percent": settings.BATTERY_LOW_PERCENT,
+            "log_levels": ri.LOG_LEVELS,
+            "recharge_states": ri.RECHARGE_STATES,
+            "rosbridge_url": settings.ROSBRIDGE_URL,
+        },
+    }

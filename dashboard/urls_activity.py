@@ -1,0 +1,2 @@
+# Page routes (see the issue that owns this page).
+urlpatterns: list = []

@@ -1,0 +1,28 @@
+from django.apps import AppConfig
+from django.core import checks
+
+
+class RobotConfig(AppConfig):
+    name = "robot"
+    default_auto_field = "django.db.models.BigAutoField"
+
+    def ready(self) -> None:
+        checks.register(check_robot_settings)
+
+
+def check_robot_settings(app_configs, **kwargs):
+    from django.conf import settings
+
+    from robot import interface
+
+    errors = []
+    if not settings.ROSBRIDGE_URL.startswith(("ws://", "wss://")):
+        errors.append(checks.Error("ROSBRIDGE_URL must start with ws:// or wss://", id="robot.E001"))
+    if not settings.VIDEO_URL.startswith(("http://", "https://")):
+        errors.append(checks.Error("VIDEO_URL must start with http:// or https://", id="robot.E002"))
+    try:
+        interface.reload()
+        interface.topics(), interface.services(), interface.actions()
+    except KeyError as exc:
+        errors.append(checks.Error(f"ROBOT_NAME_OVERRIDES: {exc.args[0]}", id="robot.E003"))
+    return errors

@@ -1,0 +1,89 @@
+"""Ask the robot link to do something, from any process: web views, consumers, tasks.
+
+Requests travel over the channel layer to the one link process, so there is exactly one
+rosbridge connection however many web processes there are. A request carries a
+deadline: if the link gets it too late it is dropped, never fired later.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+import uuid
+from typing import Any
+
+from asgiref.sync import async_to_sync
+from channels.layers import get_channel_layer
+from django.conf import settings
+
+from robot import interface as ri
+from robot.groups import LINK_CHANNEL, LinkReply, LinkRequest
+from robot.state import STATUS_KEY, get_store, status_view
+
+
+class RobotError(Exception):
+    """A command could not be carried out; ``code`` maps to an HTTP status."""
+
+    status_code = 502
+    code = "failed"
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+
+class RobotOffline(RobotError):
+    status_code = 503
+    code = "offline"
+
+
+class RobotTimeout(RobotError):
+    status_code = 504
+    code = "timeout"
+
+
+_ERRORS: dict[str, type[RobotError]] = {"offline": RobotOffline, "timeout": RobotTimeout}
+
+
+async def _is_online() -> bool:
+    status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
+    return bool(status_view(status)["connected"])
+
+
+async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> LinkReply:  # noqa: ASYNC109
+    """Send one request to the link and wait for its reply; raise RobotError on failure."""
+    if op != "reconnect" and not await _is_online():
+        raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+    timeout = timeout or settings.ROBOT_REQUEST_TIMEOUT_S
+    layer = get_channel_layer()
+    reply_to = await layer.new_channel("robot-reply.")
+    request: LinkRequest = {
+        "type": "link.request", "op": op, "request_id": uuid.uuid4().hex, "reply_to": reply_to,
+        # The link may need most of the timeout for a service call; leave room for the reply.
+        "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
+    }
+    await layer.send(LINK_CHANNEL, request)
+    try:
+        reply: LinkReply = await asyncio.wait_for(layer.receive(reply_to), timeout)
+    except TimeoutError:
+        raise RobotTimeout(f"The robot link did not answer in {timeout:g} s") from None
+    if not reply.get("ok"):
+        raise _ERRORS.get(reply.get("error_code", ""), RobotError)(reply.get("error", "The robot refused the command"))
+    return reply
+
+
+async def apublish(key: str, msg: dict[str, Any]) -> None:
+    """Publish ``msg`` on the registry topic ``key`` (validate it before calling)."""
+    t = ri.topic(key)
+    await arequest("publish", topic=t.name, msg_type=t.type, msg=msg)
+
+
+async def acall_service(key: str, args: dict[str, Any] | None = None, *, timeout: float | None = None) -> Any:  # noqa: ASYNC109
+    s = ri.service(key)
+    reply = await arequest("call_service", service=s.name, service_type=s.type, args=args or {}, timeout=timeout)
+    return reply.get("values")
+
+
+publish = async_to_sync(apublish)
+call_service = async_to_sync(acall_service)
+request = async_to_sync(arequest)

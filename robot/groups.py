@@ -1,0 +1,59 @@
+"""Channel-layer names and payload shapes, defined once.
+
+Group names may only use letters, digits, ``-``, ``_`` and ``.``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, TypedDict
+
+# The robot link listens on this channel for requests from web processes and tasks.
+LINK_CHANNEL = "robot-link"
+STATUS_GROUP = "robot.status"
+
+
+def topic_group(key: str) -> str:
+    return f"robot.topic.{key}"
+
+
+class TopicUpdate(TypedDict):
+    type: Literal["robot.update"]
+    key: str
+    topic: str
+    msg_type: str
+    msg: dict[str, Any]
+    t: float  # epoch seconds when the link received it
+
+
+class LinkStatus(TypedDict):
+    type: Literal["robot.status"]
+    connected: bool
+    url: str
+    since: float  # epoch seconds of the last change
+    attempts: int  # connection attempts since the last drop
+    link_alive: float  # epoch seconds of the link's last heartbeat
+
+
+class LinkRequest(TypedDict, total=False):
+    type: Literal["link.request"]
+    request_id: str
+    reply_to: str
+    deadline: float  # epoch seconds; the link drops requests it gets too late
+    op: str  # publish | call_service | reconnect | subscribe
+    key: str
+    topic: str
+    msg_type: str
+    msg: dict[str, Any]
+    service: str
+    service_type: str
+    args: dict[str, Any]
+    timeout: float
+
+
+class LinkReply(TypedDict, total=False):
+    type: Literal["link.reply"]
+    request_id: str
+    ok: bool
+    error: str
+    error_code: str  # offline | timeout | failed | invalid
+    values: Any

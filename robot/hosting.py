@@ -1,0 +1,75 @@
+"""Host the robot link (and other background services) inside a running event loop.
+
+Used by ``manage.py robotlink`` and, in the embedded default, by the Daphne server
+process itself, so both run the same code.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import sys
+from collections.abc import Awaitable, Callable
+
+from channels.layers import get_channel_layer
+from django.conf import settings
+
+from robot import link as link_module
+from robot.link import RobotLink
+from robot.state import get_store
+
+log = logging.getLogger(__name__)
+
+# Other apps add background loops that must run where the link runs (e.g. history sampling
+# in the embedded default). Each gets the link and runs until cancelled.
+BackgroundService = Callable[[RobotLink], Awaitable[None]]
+_background: list[tuple[str, BackgroundService, bool]] = []
+
+
+def register_background(name: str, service: BackgroundService, *, embedded_only: bool = False) -> None:
+    if all(existing != name for existing, _, _ in _background):
+        _background.append((name, service, embedded_only))
+
+
+async def start_link(*, embedded: bool) -> tuple[RobotLink, list[asyncio.Task]]:
+    link = RobotLink(
+        settings.ROSBRIDGE_URL,
+        store=get_store(),
+        layer=get_channel_layer(),
+        max_backoff_s=settings.ROBOT_LINK_MAX_BACKOFF_S,
+        service_timeout_s=settings.ROBOT_REQUEST_TIMEOUT_S,
+    )
+    await link.start()
+    link_module.current = link
+    tasks = [
+        asyncio.ensure_future(_run_forever(name, service, link))
+        for name, service, embedded_only in _background
+        if embedded or not embedded_only
+    ]
+    log.info("robot link started for %s (%s)", settings.ROSBRIDGE_URL, "embedded" if embedded else "standalone")
+    return link, tasks
+
+
+async def _run_forever(name: str, service: BackgroundService, link: RobotLink) -> None:
+    while True:
+        try:
+            await service(link)
+            return
+        except asyncio.CancelledError:
+            raise
+        except Exception:
+            log.exception("background service %s failed; restarting in 5 s", name)
+            await asyncio.sleep(5)
+
+
+def autostart_in_daphne() -> None:
+    """In the embedded default, start the link once Daphne's reactor runs."""
+    if not settings.EMBEDDED or not settings.ROBOT_LINK_EMBEDDED:
+        return
+    if "twisted.internet.reactor" not in sys.modules:
+        return  # not inside Daphne (tests with a communicator, management commands)
+    from twisted.internet import reactor
+    from twisted.internet.asyncioreactor import AsyncioSelectorReactor
+
+    if isinstance(reactor, AsyncioSelectorReactor):
+        reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))

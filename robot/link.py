@@ -1,0 +1,299 @@
+"""The robot link: the one rosbridge connection per robot.
+
+roslibpy's Twisted transport delivers callbacks on the reactor thread. Inside Daphne that
+is the asyncio loop's own thread; in ``manage.py robotlink`` and in tests it is a thread of
+its own. Either way every callback hops onto the asyncio loop with ``call_soon_threadsafe``
+and nothing in a callback blocks.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Awaitable, Callable, Iterable
+from typing import Any
+
+import roslibpy
+
+from robot import interface as ri
+from robot.fanout import Coalescer
+from robot.groups import LINK_CHANNEL, STATUS_GROUP, LinkReply, LinkRequest, LinkStatus, TopicUpdate, topic_group
+from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
+
+log = logging.getLogger(__name__)
+
+# (topic name, type, message, receive time) for every message on every subscribed topic.
+Listener = Callable[[str, str, dict[str, Any], float], None]
+# Per-key handlers replace the generic store/fan-out path (e.g. the map renderer).
+Handler = Callable[[ri.Topic, dict[str, Any], float], Awaitable[None] | None]
+
+_handlers: dict[str, Handler] = {}
+
+
+def register_handler(key: str, handler: Handler) -> None:
+    """Route ``key``'s messages to ``handler`` instead of the store and browsers (apps call this in ready())."""
+    _handlers[key] = handler
+
+
+class RobotLink:
+    def __init__(
+        self,
+        url: str,
+        *,
+        store: StateStore,
+        layer: Any,
+        topics: Iterable[ri.Topic] | None = None,
+        max_backoff_s: float = 10.0,
+        service_timeout_s: float = 5.0,
+    ) -> None:
+        self.url = url
+        self.store = store
+        self.layer = layer
+        self.topics = list(topics if topics is not None else ri.monitored_topics())
+        self.max_backoff_s = max_backoff_s
+        self.service_timeout_s = service_timeout_s
+        self.listeners: list[Listener] = []
+        self.connected = False
+        self.since = time.time()
+        self.attempts = 0
+        self.ros: roslibpy.Ros | None = None
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self._subscriptions: dict[str, roslibpy.Topic] = {}
+        self._publishers: dict[str, roslibpy.Topic] = {}
+        self._tasks: list[asyncio.Task] = []
+        self._coalescer: Coalescer | None = None
+        self._stopped = False
+        self._inflight: set[asyncio.Future] = set()
+
+    # --- lifecycle -------------------------------------------------------------------
+
+    async def start(self, *, serve_requests: bool = True) -> None:
+        from twisted.internet import reactor
+
+        self.loop = asyncio.get_running_loop()
+        self._coalescer = Coalescer(self._send_update, loop=self.loop)
+        self.ros = roslibpy.Ros(self.url)  # connects (and later reconnects) by itself
+        self.ros.factory.maxDelay = self.max_backoff_s
+        self.ros.factory.initialDelay = 0.5
+        self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready))
+        self.ros.on("close", lambda *_: self._threadsafe(self._on_close))
+        if not reactor.running:
+            self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)
+        for t in self.topics:
+            self.subscribe(t.name, t.type)
+        self._tasks.append(asyncio.ensure_future(self._heartbeat()))
+        if serve_requests:
+            self._tasks.append(asyncio.ensure_future(self._serve()))
+        await self._publish_status()
+
+    async def stop(self) -> None:
+        self._stopped = True
+        for task in self._tasks:
+            task.cancel()
+        for task in self._tasks:
+            try:
+                await task
+            except (asyncio.CancelledError, Exception):
+                pass
+        self._tasks.clear()
+        if self._coalescer is not None:
+            self._coalescer.close()
+        if self.ros is not None:
+            ros, self.ros = self.ros, None
+            for topic in list(self._subscriptions.values()):
+                topic.reconnect_on_close = False
+            ros.factory.stopTrying()
+            if ros.is_connected:
+                await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
+        self.connected = False
+
+    def _spawn(self, coro: Any) -> None:
+        task = asyncio.ensure_future(coro)
+        self._inflight.add(task)
+        task.add_done_callback(self._inflight.discard)
+
+    def _threadsafe(self, fn: Callable[..., Any], *args: Any) -> None:
+        loop = self.loop
+        if loop is not None and not loop.is_closed():
+            loop.call_soon_threadsafe(fn, *args)
+
+    # --- subscriptions ---------------------------------------------------------------
+
+    def subscribe(self, name: str, msg_type: str) -> None:
+        """Subscribe once to ``name``; later calls for the same topic do nothing."""
+        if name in self._subscriptions or self.ros is None:
+            return
+        topic = roslibpy.Topic(self.ros, name, msg_type)
+        topic.subscribe(lambda msg, _n=name, _t=msg_type: self._threadsafe(self._on_message, _n, _t, msg, time.time()))
+        self._subscriptions[name] = topic
+
+    def unsubscribe(self, name: str) -> None:
+        topic = self._subscriptions.pop(name, None)
+        if topic is not None and not any(t.name == name for t in self.topics):
+            topic.unsubscribe()
+        elif topic is not None:
+            self._subscriptions[name] = topic  # monitored topics stay
+
+    @property
+    def subscribed(self) -> set[str]:
+        return set(self._subscriptions)
+
+    def _on_message(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        for listener in self.listeners:
+            try:
+                listener(name, msg_type, msg, t)
+            except Exception:
+                log.exception("link listener failed for %s", name)
+        topic = ri.topic_by_name(name)
+        if topic is None:
+            return
+        handler = _handlers.get(topic.key)
+        if handler is not None:
+            result = handler(topic, msg, t)
+            if asyncio.iscoroutine(result):
+                self._spawn(result)
+            return
+        update: TopicUpdate = {
+            "type": "robot.update", "key": topic.key, "topic": name, "msg_type": msg_type, "msg": msg, "t": t,
+        }
+        assert self._coalescer is not None
+        self._coalescer.offer(topic.key, topic.ui_rate_hz, update)
+
+    async def _send_update(self, update: TopicUpdate) -> None:
+        await self.store.aput(update["key"], dict(update))
+        await self.layer.group_send(topic_group(update["key"]), update)
+
+    # --- connection status -----------------------------------------------------------
+
+    def _on_ready(self) -> None:
+        self.connected, self.since, self.attempts = True, time.time(), 0
+        log.info("robot link connected to %s", self.url)
+        self._spawn(self._publish_status())
+
+    def _on_close(self) -> None:
+        if self.connected:
+            log.warning("robot link lost %s; reconnecting", self.url)
+            self.since = time.time()
+        self.connected = False
+        self.attempts += 1
+        self._spawn(self._publish_status())
+
+    def status(self) -> LinkStatus:
+        return {
+            "type": "robot.status", "connected": self.connected, "url": self.url,
+            "since": self.since, "attempts": self.attempts, "link_alive": time.time(),
+        }
+
+    async def _publish_status(self) -> None:
+        status = self.status()
+        try:
+            await self.store.aput(STATUS_KEY, dict(status))
+            await self.layer.group_send(STATUS_GROUP, status)
+        except Exception:
+            log.exception("could not publish link status")
+
+    async def _heartbeat(self) -> None:
+        while True:
+            await asyncio.sleep(LINK_HEARTBEAT_S)
+            # Failed connection attempts emit no "close"; count them from the factory.
+            if self.ros is not None and not self.connected:
+                self.attempts = max(self.attempts, getattr(self.ros.factory, "retries", 0))
+            await self._publish_status()
+
+    def reconnect(self) -> None:
+        """Try now instead of waiting out the backoff (the page's reconnect button)."""
+        from twisted.internet import reactor
+
+        ros = self.ros
+        if ros is None:
+            return
+
+        def _now() -> None:
+            factory = ros.factory
+            factory.resetDelay()
+            call = getattr(factory, "_callID", None)
+            if call is not None and call.active():
+                call.cancel()
+                factory._callID = None
+            proto = getattr(factory, "_proto", None)
+            if proto is not None:
+                proto.dropConnection(abort=True)  # the factory reconnects at once
+            elif factory.connector is not None and factory.connector.state == "disconnected":
+                factory.connector.connect()
+
+        reactor.callFromThread(_now)
+
+    # --- requests from web processes and tasks ---------------------------------------
+
+    async def _serve(self) -> None:
+        while True:
+            request = await self.layer.receive(LINK_CHANNEL)
+            self._spawn(self._handle(request))
+
+    async def _handle(self, request: LinkRequest) -> None:
+        if request.get("deadline", float("inf")) < time.time():
+            log.warning("dropped a %s request that arrived after its deadline", request.get("op"))
+            return
+        reply = await self.execute(request)
+        reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
+        if request.get("reply_to"):
+            await self.layer.send(request["reply_to"], reply)
+
+    async def execute(self, request: LinkRequest) -> LinkReply:
+        op = request.get("op")
+        if op == "reconnect":
+            self.reconnect()
+            return {"ok": True}
+        if op == "subscribe":
+            self.subscribe(request["topic"], request["msg_type"])
+            return {"ok": True}
+        if not self.connected or self.ros is None or not self.ros.is_connected:
+            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if op == "publish":
+            self._publisher(request["topic"], request["msg_type"]).publish(roslibpy.Message(request["msg"]))
+            return {"ok": True}
+        if op == "call_service":
+            return await self._call_service(request)
+        return {"ok": False, "error_code": "invalid", "error": f"Unknown link operation {op!r}"}
+
+    def _publisher(self, name: str, msg_type: str) -> roslibpy.Topic:
+        topic = self._publishers.get(name)
+        if topic is None:
+            topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
+        return topic
+
+    async def _call_service(self, request: LinkRequest) -> LinkReply:
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future = loop.create_future()
+
+        def settle(ok: bool, value: Any) -> None:
+            if not future.done():
+                future.set_result((ok, value))
+
+        service = roslibpy.Service(self.ros, request["service"], request["service_type"])
+        service.call(
+            roslibpy.ServiceRequest(request.get("args") or {}),
+            callback=lambda values: self._threadsafe(settle, True, dict(values)),
+            errback=lambda error: self._threadsafe(settle, False, error),
+        )
+        timeout = float(request.get("timeout") or self.service_timeout_s)
+        try:
+            ok, value = await asyncio.wait_for(future, timeout)
+        except TimeoutError:
+            error = f"{request['service']} did not answer in {timeout:g} s"
+            return {"ok": False, "error_code": "timeout", "error": error}
+        if ok:
+            return {"ok": True, "values": value}
+        return {"ok": False, "error_code": "failed", "error": str(value)}
+
+
+def _close_quietly(ros: roslibpy.Ros) -> None:
+    try:
+        ros.close(timeout=2)
+    except Exception:
+        log.debug("close of the rosbridge connection did not complete", exc_info=True)
+
+
+# The link hosted by this process, if any (embedded default, robotlink command, tests).
+current: RobotLink | None = None

@@ -1,0 +1,91 @@
+from django.conf import settings
+from django.core.validators import MaxValueValidator, MinValueValidator, RegexValidator
+from django.db import models
+
+_pad = [MinValueValidator(-1.0), MaxValueValidator(1.0)]
+_slug = RegexValidator(r"^[A-Za-z0-9_\-]+$", "Use letters, digits, '_' and '-' only.")
+
+
+class AuditEntry(models.Model):
+    """One command someone (or something) sent to the robot, and what came of it."""
+
+    class Source(models.TextChoices):
+        PAGE = "page"
+        API = "api"
+        WEBSOCKET = "websocket"
+        SYSTEM = "system"
+
+    created = models.DateTimeField(auto_now_add=True, db_index=True)
+    user = models.ForeignKey(settings.AUTH_USER_MODEL, null=True, blank=True, on_delete=models.SET_NULL)
+    username = models.CharField(max_length=150, blank=True)
+    source = models.CharField(max_length=16, choices=Source.choices)
+    action = models.CharField(max_length=64, db_index=True)
+    params = models.JSONField(default=dict, blank=True)
+    ok = models.BooleanField(default=False)
+    outcome = models.TextField(blank=True)
+    error_code = models.CharField(max_length=32, blank=True)
+
+    class Meta:
+        ordering = ["-created", "-id"]
+        verbose_name_plural = "audit entries"
+
+    def __str__(self) -> str:
+        return f"{self.created:%Y-%m-%d %H:%M:%S} {self.username or '-'} {self.action} {'ok' if self.ok else 'failed'}"
+
+
+class EmotionPreset(models.Model):
+    name = models.CharField(max_length=64, unique=True, validators=[_slug])
+    pleasure = models.FloatField(validators=_pad)
+    arousal = models.FloatField(validators=_pad)
+    dominance = models.FloatField(validators=_pad)
+    description = models.CharField(max_length=200, blank=True)
+
+    class Meta:
+        ordering = ["name"]
+
+    def __str__(self) -> str:
+        return self.name
+
+
+class SoundClip(models.Model):
+    name = models.CharField(max_length=64, unique=True, validators=[_slug], help_text="Clip name the robot plays.")
+    label = models.CharField(max_length=100, blank=True)
+    description = models.CharField(max_length=200, blank=True)
+
+    class Meta:
+        ordering = ["name"]
+
+    def __str__(self) -> str:
+        return self.label or self.name
+
+
+class DomeMode(models.Model):
+    name = models.CharField(max_length=64, unique=True, validators=[_slug], help_text="Visual mode string.")
+    label = models.CharField(max_length=100, blank=True)
+    description = models.CharField(max_length=200, blank=True)
+
+    class Meta:
+        ordering = ["name"]
+
+    def __str__(self) -> str:
+        return self.label or self.name
+
+
+class Location(models.Model):
+    """A named place on a map the robot can be sent to."""
+
+    name = models.CharField(max_length=64, unique=True, validators=[_slug])
+    map_name = models.CharField(max_length=64, blank=True, default="")
+    x = models.FloatField()
+    y = models.FloatField()
+    yaw = models.FloatField(default=0.0, help_text="Heading in radians.")
+    threshold = models.FloatField(default=0.5, validators=[MinValueValidator(0.0)], help_text="Arrival radius (m).")
+    description = models.CharField(max_length=200, blank=True)
+    created = models.DateTimeField(auto_now_add=True)
+    updated = models.DateTimeField(auto_now=True)
+
+    class Meta:
+        ordering = ["name"]
+
+    def __str__(self) -> str:
+        return self.name

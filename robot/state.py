@@ -1,0 +1,123 @@
+"""The latest-state store: the newest message of every monitored topic, plus link status.
+
+In-process (embedded default) or Redis (``REDIS_URL``): the same interface, so the
+dashboard, the API and the history sampler read it the same way.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any, Protocol
+
+from django.conf import settings
+
+STATUS_KEY = "_link"
+
+
+class StateStore(Protocol):
+    async def aput(self, key: str, entry: dict[str, Any]) -> None: ...
+    async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]: ...
+    def get_all(self) -> dict[str, dict[str, Any]]: ...
+    def put(self, key: str, entry: dict[str, Any]) -> None: ...
+    def clear(self) -> None: ...
+
+
+class MemoryStore:
+    def __init__(self) -> None:
+        self._data: dict[str, dict[str, Any]] = {}
+
+    async def aput(self, key: str, entry: dict[str, Any]) -> None:
+        self._data[key] = entry
+
+    def put(self, key: str, entry: dict[str, Any]) -> None:
+        self._data[key] = entry
+
+    async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]:
+        return {k: self._data[k] for k in keys if k in self._data}
+
+    def get_all(self) -> dict[str, dict[str, Any]]:
+        return dict(self._data)
+
+    def clear(self) -> None:
+        self._data.clear()
+
+
+class RedisStore:
+    def __init__(self, url: str, name: str) -> None:
+        import redis
+        import redis.asyncio
+
+        self._name = name
+        self._sync = redis.Redis.from_url(url)
+        self._async_url = url
+        self._async_clients: dict[int, Any] = {}
+        self._aioredis = redis.asyncio
+
+    def _aclient(self):
+        # An asyncio client is bound to the loop it was first used on.
+        import asyncio
+
+        loop_id = id(asyncio.get_running_loop())
+        client = self._async_clients.get(loop_id)
+        if client is None:
+            client = self._async_clients[loop_id] = self._aioredis.Redis.from_url(self._async_url)
+        return client
+
+    async def aput(self, key: str, entry: dict[str, Any]) -> None:
+        await self._aclient().hset(self._name, key, json.dumps(entry))
+
+    def put(self, key: str, entry: dict[str, Any]) -> None:
+        self._sync.hset(self._name, key, json.dumps(entry))
+
+    async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]:
+        if not keys:
+            return {}
+        values = await self._aclient().hmget(self._name, keys)
+        return {k: json.loads(v) for k, v in zip(keys, values, strict=True) if v is not None}
+
+    def get_all(self) -> dict[str, dict[str, Any]]:
+        return {k.decode(): json.loads(v) for k, v in self._sync.hgetall(self._name).items()}
+
+    def clear(self) -> None:
+        self._sync.delete(self._name)
+
+
+_store: StateStore | None = None
+
+
+def get_store() -> StateStore:
+    global _store
+    if _store is None:
+        if settings.REDIS_URL:
+            prefix = settings.CHANNEL_LAYERS["default"]["CONFIG"].get("prefix", "cyborg")
+            _store = RedisStore(settings.REDIS_URL, f"{prefix}:latest-state")
+        else:
+            _store = MemoryStore()
+    return _store
+
+
+def reset_store() -> None:
+    global _store
+    _store = None
+
+
+def entry_age(entry: dict[str, Any], now: float | None = None) -> float:
+    return (now or time.time()) - float(entry.get("t", 0))
+
+
+def link_status(store: StateStore | None = None) -> dict[str, Any]:
+    """The link's last reported status; offline when the link has not reported recently."""
+    status = (store or get_store()).get_all().get(STATUS_KEY)
+    return status_view(status)
+
+
+def status_view(status: dict[str, Any] | None, now: float | None = None) -> dict[str, Any]:
+    now = now or time.time()
+    if not status:
+        return {"connected": False, "url": settings.ROSBRIDGE_URL, "since": None, "attempts": 0, "link_alive": None}
+    alive = now - float(status.get("link_alive") or 0) < LINK_HEARTBEAT_S * 3
+    return {**status, "connected": bool(status.get("connected")) and alive, "link_running": alive}
+
+
+LINK_HEARTBEAT_S = 2.0

@@ -1,0 +1,143 @@
+import { connectLive, formatAge, notify } from "./live.js";
+
+const config = JSON.parse(document.getElementById("live-config").textContent);
+const latest = {}; // key -> {msg, t}
+const field = (name) => document.querySelectorAll(`[data-field="${name}"]`);
+const set = (name, text) => field(name).forEach((el) => { el.textContent = text; });
+
+const renderers = {
+  battery_soc(m) {
+    const pct = Math.round(m.data * 1000) / 10;
+    set("battery.percent", `${pct.toFixed(1)} %`);
+    field("battery.meter").forEach((el) => { el.value = pct; });
+    alertIf("battery", pct < config.battery_low_percent, `Battery low: ${pct.toFixed(1)} %`);
+  },
+  battery_voltage(m) { set("battery.voltage", `${m.data.toFixed(2)} V`); },
+  battery_recharge_state(m) {
+    const name = config.recharge_states[m.data] ?? (m.data > 0 ? "charging" : "error");
+    set("battery.charging", m.data < -1 ? `error (${m.data})` : name);
+  },
+  motors_state(m) { set("motors.state", m.data ? "enabled" : "disabled"); },
+  robot_mode(m) { set("mode.requested", m.data); },
+  current_location(m) { set("location.current", m.data || "(none)"); },
+  state_change(m) {
+    set("smach.current", m.to_system_state);
+    set("smach.previous", m.from_system_state || "—");
+    set("smach.event", m.event || "—");
+  },
+  emotional_state(m) {
+    set("emotion.name", m.to_emotional_state);
+    const pad = { P: m.current_pleasure, A: m.current_arousal, D: m.current_dominance };
+    for (const [dim, v] of Object.entries(pad)) {
+      document.querySelectorAll(`[data-pad="${dim}"]`).forEach((el) => {
+        el.style.left = v < 0 ? `${50 + 50 * v}%` : "50%";
+        el.style.width = `${Math.abs(50 * v)}%`;
+        el.classList.toggle("neg", v < 0);
+      });
+      document.querySelectorAll(`[data-pad-value="${dim}"]`).forEach((el) => { el.textContent = v.toFixed(2); });
+    }
+  },
+  emotion_system_status(m) { set("emotion.system", m.data ? "system on" : "system off"); },
+  text_to_speech(m) { set("tts.last", m.data); },
+  tts_feedback(m) { set("tts.feedback", m.data); },
+  rosout(m) { logLine(m); },
+};
+
+// --- alerts strip ----------------------------------------------------------------------
+const alerts = document.getElementById("alerts");
+function alertIf(id, on, text, level = "warn") {
+  let el = alerts.querySelector(`[data-alert="${id}"]`);
+  if (!on) { el?.remove(); return; }
+  if (!el) {
+    el = document.createElement("div");
+    el.dataset.alert = id;
+    el.className = `alert alert-${level}`;
+    alerts.append(el);
+  }
+  el.textContent = text;
+}
+
+// --- log console -----------------------------------------------------------------------
+const logBox = document.getElementById("log");
+const levelSelect = document.getElementById("log-level");
+const pauseBtn = document.getElementById("log-pause");
+const held = [];
+let paused = false;
+const MAX_LINES = 500;
+
+function logLine(m) {
+  if (m.level >= 8) {
+    alertIf(`log-${m.name}`, true, `${config.log_levels[m.level]} from ${m.name}: ${m.msg}`, "error");
+  }
+  if (paused) { held.push(m); document.getElementById("log-held").textContent = `${held.length} new lines held while paused`; return; }
+  appendLine(m);
+}
+
+function appendLine(m) {
+  const row = document.createElement("div");
+  const levelName = config.log_levels[m.level] || String(m.level);
+  row.className = `log-line log-${levelName.toLowerCase()}`;
+  row.dataset.level = m.level;
+  const stamp = m.header?.stamp ? new Date((m.header.stamp.secs + m.header.stamp.nsecs / 1e9) * 1000) : new Date();
+  row.textContent = `${stamp.toLocaleTimeString()} [${levelName}] ${m.name}: ${m.msg}`;
+  row.hidden = m.level < Number(levelSelect.value);
+  const atBottom = logBox.scrollTop + logBox.clientHeight >= logBox.scrollHeight - 4;
+  logBox.append(row);
+  while (logBox.childElementCount > MAX_LINES) logBox.firstElementChild.remove();
+  if (atBottom) logBox.scrollTop = logBox.scrollHeight;
+}
+
+levelSelect.addEventListener("change", () => {
+  const min = Number(levelSelect.value);
+  logBox.querySelectorAll(".log-line").forEach((row) => { row.hidden = Number(row.dataset.level) < min; });
+});
+pauseBtn.addEventListener("click", () => {
+  paused = !paused;
+  pauseBtn.textContent = paused ? "Resume" : "Pause";
+  pauseBtn.setAttribute("aria-pressed", String(paused));
+  if (!paused) { held.splice(0).forEach(appendLine); document.getElementById("log-held").textContent = ""; }
+});
+document.getElementById("log-clear").addEventListener("click", () => { logBox.replaceChildren(); });
+
+// --- connection card and ages ----------------------------------------------------------
+function renderStatus(s) {
+  if (s.server_down) {
+    set("link.state", "Server unreachable");
+    set("link.detail", "retrying…");
+  } else {
+    set("link.state", s.connected ? "Online" : (s.link_running === false ? "Robot link not running" : "Offline"));
+    const since = s.since ? formatAge(Date.now() / 1000 - s.since) : "";
+    set("link.detail", s.connected ? `connected ${since}` : `retrying${s.attempts ? ` (attempt ${s.attempts})` : ""}`);
+    if (s.url) set("link.url", s.url);
+  }
+  document.getElementById("card-connection").classList.toggle("bad", !s.connected);
+  alertIf("offline", !s.connected, s.server_down ? "Lost the connection to the server; retrying…" : "Robot offline: values below are the last known ones.", "error");
+}
+
+function tickAges() {
+  const now = Date.now() / 1000;
+  document.querySelectorAll("[data-age]").forEach((el) => {
+    const entry = latest[el.dataset.age];
+    const age = entry ? now - entry.t : null;
+    el.textContent = entry ? `updated ${formatAge(age)}` : "no data yet";
+    el.closest(".card")?.classList.toggle("stale", !entry || age > config.stale_after_s);
+  });
+}
+setInterval(tickAges, 1000);
+
+const live = connectLive({
+  keys: config.keys,
+  onUpdate(frame) {
+    latest[frame.key] = frame;
+    try { renderers[frame.key]?.(frame.msg); } catch (e) { console.error("render", frame.key, e); }
+    tickAges();
+    document.dispatchEvent(new CustomEvent("robot:update", { detail: frame }));
+  },
+  onStatus: renderStatus,
+});
+document.getElementById("reconnect-btn")?.addEventListener("click", () => {
+  live.send({ action: "reconnect" });
+  notify("Asking the link to reconnect…");
+});
+window.cyborgLive = live;
+tickAges();
