@@ -17,7 +17,9 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot import interface as ri
+from robot import link as link_module
 from robot.groups import LINK_CHANNEL, LinkReply, LinkRequest
+from robot.link import RobotLink
 from robot.state import STATUS_KEY, get_store, status_view
 
 
@@ -52,24 +54,40 @@ async def _is_online() -> bool:
 
 async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> LinkReply:  # noqa: ASYNC109
     """Send one request to the link and wait for its reply; raise RobotError on failure."""
-    if op != "reconnect" and not await _is_online():
-        raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
     timeout = timeout or settings.ROBOT_REQUEST_TIMEOUT_S
-    layer = get_channel_layer()
-    reply_to = await layer.new_channel("robot-reply.")
     request: LinkRequest = {
-        "type": "link.request", "op": op, "request_id": uuid.uuid4().hex, "reply_to": reply_to,
+        "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
         # The link may need most of the timeout for a service call; leave room for the reply.
         "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
     }
-    await layer.send(LINK_CHANNEL, request)
+    hosted = link_module.current
     try:
-        reply: LinkReply = await asyncio.wait_for(layer.receive(reply_to), timeout)
+        if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
+            reply = await asyncio.wait_for(_direct(hosted, request), timeout)
+        else:
+            if op != "reconnect" and not await _is_online():
+                raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+            reply = await asyncio.wait_for(_via_layer(request), timeout)
     except TimeoutError:
         raise RobotTimeout(f"The robot link did not answer in {timeout:g} s") from None
     if not reply.get("ok"):
         raise _ERRORS.get(reply.get("error_code", ""), RobotError)(reply.get("error", "The robot refused the command"))
     return reply
+
+
+async def _direct(hosted: RobotLink, request: LinkRequest) -> LinkReply:
+    """The link lives in this process (embedded default): no channel-layer hop."""
+    if asyncio.get_running_loop() is hosted.loop:
+        return await hosted.execute(request)
+    future = asyncio.run_coroutine_threadsafe(hosted.execute(request), hosted.loop)
+    return await asyncio.wrap_future(future)
+
+
+async def _via_layer(request: LinkRequest) -> LinkReply:
+    layer = get_channel_layer()
+    request["reply_to"] = await layer.new_channel("robot-reply.")
+    await layer.send(LINK_CHANNEL, request)
+    return await layer.receive(request["reply_to"])
 
 
 async def apublish(key: str, msg: dict[str, Any]) -> None:

@@ -1,0 +1,11 @@
+from django.contrib.auth.decorators import login_not_required
+from django.http import JsonResponse
+
+from robot.state import link_status
+
+
+@login_not_required
+def healthz(request):
+    """For load balancers and scripts: is the server up, is the robot link connected."""
+    status = link_status()
+    return JsonResponse({"ok": True, "connected": status["connected"], "link_running": status.get("link_running", False)})

@@ -1,0 +1,157 @@
+"""Fixtures shared by the whole suite: users by role, the simulator, the robot link."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+
+import pytest
+from channels.layers import channel_layers
+from django.conf import settings as django_settings
+
+from cyborg_site.roles import Role
+from tests.helpers import async_wait_until, wait_until
+
+PASSWORD = "correct-horse-battery"
+
+
+# --- users by role -----------------------------------------------------------------------
+
+
+def _user(username: str, role: Role):
+    from dashboard.accounts import create_user
+
+    return create_user(username, role, password=PASSWORD)[0]
+
+
+@pytest.fixture
+def viewer(db):
+    return _user("vera", Role.VIEWER)
+
+
+@pytest.fixture
+def operator(db):
+    return _user("otto", Role.OPERATOR)
+
+
+@pytest.fixture
+def admin_user(db):
+    return _user("ada", Role.ADMIN)
+
+
+def _api_client(user=None):
+    from rest_framework.test import APIClient
+
+    client = APIClient()
+    if user is not None:
+        client.force_authenticate(user)
+    return client
+
+
+@pytest.fixture
+def anon_api():
+    return _api_client()
+
+
+@pytest.fixture
+def viewer_api(viewer):
+    return _api_client(viewer)
+
+
+@pytest.fixture
+def operator_api(operator):
+    return _api_client(operator)
+
+
+@pytest.fixture
+def admin_api(admin_user):
+    return _api_client(admin_user)
+
+
+# --- backing services ----------------------------------------------------------------------
+
+
+@pytest.fixture(autouse=True)
+def _fresh_layer_and_store():
+    """Each test gets an empty channel layer and latest-state store."""
+    from robot import interface
+    from robot.state import get_store, reset_store
+
+    channel_layers.backends = {}
+    reset_store()
+    get_store().clear()
+    interface.reload()
+    yield
+    get_store().clear()
+    reset_store()
+    channel_layers.backends = {}
+
+
+@pytest.fixture
+def sim():
+    """A simulated Cyborg on a free port, in a thread of its own."""
+    from robot.sim.harness import SimThread
+
+    with SimThread(port=0, video_port=0, startup_s=0.5) as running:
+        yield running
+
+
+@pytest.fixture
+async def link(sim, settings):
+    """The robot link hosted on the test's event loop, connected to ``sim``."""
+    from robot import link as link_module
+    from robot.hosting import start_link
+
+    settings.ROSBRIDGE_URL = sim.url
+    hosted, tasks = await start_link(embedded=True)
+    await async_wait_until(lambda: hosted.connected, timeout=10, what="link connected")
+    yield hosted
+    for task in tasks:
+        task.cancel()
+    await hosted.stop()
+    link_module.current = None
+
+
+class LinkThread:
+    """The robot link on an event loop in a thread, for synchronous tests (API views)."""
+
+    def __init__(self) -> None:
+        self.loop = asyncio.new_event_loop()
+        self.thread = threading.Thread(target=self.loop.run_forever, daemon=True)
+        self.link = None
+        self.tasks: list = []
+
+    def start(self):
+        from robot.hosting import start_link
+
+        self.thread.start()
+        self.link, self.tasks = asyncio.run_coroutine_threadsafe(start_link(embedded=True), self.loop).result(10)
+        wait_until(lambda: self.link.connected, timeout=10, what="link connected")
+        return self.link
+
+    def stop(self) -> None:
+        from robot import link as link_module
+
+        async def _stop():
+            for task in self.tasks:
+                task.cancel()
+            await self.link.stop()
+
+        asyncio.run_coroutine_threadsafe(_stop(), self.loop).result(10)
+        link_module.current = None
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(5)
+
+
+@pytest.fixture
+def link_thread(sim, settings):
+    settings.ROSBRIDGE_URL = sim.url
+    runner = LinkThread()
+    runner.start()
+    yield runner.link
+    runner.stop()
+
+
+@pytest.fixture
+def uses_redis():
+    return bool(django_settings.REDIS_URL)

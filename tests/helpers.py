@@ -1,0 +1,58 @@
+"""Polling helpers: wait for a condition with a deadline instead of sleeping."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+from typing import Any
+
+
+def wait_until(predicate: Callable[[], Any], *, timeout: float = 5.0, interval: float = 0.02, what: str = "") -> Any:
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what or predicate}")
+        time.sleep(interval)
+
+
+async def async_wait_until(
+    predicate: Callable[[], Any], *, timeout: float = 5.0, interval: float = 0.02, what: str = ""
+) -> Any:
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what or predicate}")
+        await asyncio.sleep(interval)
+
+
+async def receive_until(communicator, predicate: Callable[[dict], bool], *, timeout: float = 5.0) -> dict:
+    """Read frames from a websocket communicator until one matches."""
+    deadline = time.monotonic() + timeout
+    while True:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            raise AssertionError("no matching websocket frame arrived in time")
+        frame = await communicator.receive_json_from(timeout=remaining)
+        if predicate(frame):
+            return frame
+
+
+def ws_communicator(user, path: str = "/ws/live/"):
+    """A communicator against the full ASGI application with ``user`` already authenticated."""
+    from channels.testing import WebsocketCommunicator
+
+    from cyborg_site.asgi import application
+
+    communicator = WebsocketCommunicator(
+        application, path, headers=[(b"origin", b"http://127.0.0.1"), (b"host", b"127.0.0.1")]
+    )
+    if user is not None:
+        communicator.scope["user"] = user
+    return communicator

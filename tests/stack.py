@@ -1,0 +1,145 @@
+"""The whole product as real processes: simulator + Daphne (+ optional Celery worker).
+
+Used by browser tests and benchmarks. Each stack gets its own SQLite file (or the
+given DATABASE_URL), free ports, and users per role.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PYTHON = sys.executable
+PASSWORD = "correct-horse-battery"
+USERS = {"ada": "admin", "otto": "operator", "olga": "operator", "vera": "viewer"}
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for_port(port: int, timeout: float = 20.0, proc: subprocess.Popen | None = None) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc is not None and proc.poll() is not None:
+            raise RuntimeError(f"process exited early with {proc.returncode}")
+        try:
+            with socket.create_connection(("127.0.0.1", port), 0.2):
+                return
+        except OSError:
+            time.sleep(0.05)
+    raise RuntimeError(f"nothing listening on {port} after {timeout} s")
+
+
+class Stack:
+    def __init__(self, *, sim: bool = True, sim_args: tuple[str, ...] = (), env: dict[str, str] | None = None,
+                 users: bool = True) -> None:
+        self.tmp = Path(tempfile.mkdtemp(prefix="cyborg-stack-"))
+        self.web_port = free_port()
+        self.sim_port = free_port()
+        self.video_port = free_port()
+        self.with_sim = sim
+        self.sim_args = sim_args
+        self.procs: list[subprocess.Popen] = []
+        self.users = users
+        self.env = {
+            **{k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")},
+            "VAR_DIR": str(self.tmp),
+            "DATABASE_URL": f"sqlite:///{self.tmp / 'db.sqlite3'}",
+            "ROSBRIDGE_URL": f"ws://127.0.0.1:{self.sim_port}",
+            "VIDEO_URL": f"http://127.0.0.1:{self.video_port}",
+            "ROBOT_LINK_MAX_BACKOFF_S": "1",
+            "DJANGO_SETTINGS_MODULE": "cyborg_site.settings",
+            "PYTHONUNBUFFERED": "1",
+            **(env or {}),
+        }
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.web_port}"
+
+    def manage(self, *args: str) -> str:
+        out = subprocess.run([PYTHON, "manage.py", *args], cwd=ROOT, env=self.env, check=True,
+                             capture_output=True, text=True, timeout=120)
+        return out.stdout
+
+    def _spawn(self, args: list[str], name: str) -> subprocess.Popen:
+        log = open(self.tmp / f"{name}.log", "w")
+        proc = subprocess.Popen(args, cwd=ROOT, env=self.env, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+        self.procs.append(proc)
+        return proc
+
+    def start_sim(self) -> subprocess.Popen:
+        proc = self._spawn([PYTHON, "manage.py", "simrobot", "--port", str(self.sim_port),
+                            "--video-port", str(self.video_port), *self.sim_args], "sim")
+        wait_for_port(self.sim_port, proc=proc)
+        self.sim_proc = proc
+        return proc
+
+    def stop_sim(self) -> None:
+        self._terminate(self.sim_proc)
+
+    def start(self) -> Stack:
+        self.manage("migrate", "--noinput")
+        if self.users:
+            for name, role in USERS.items():
+                self.manage("adduser", name, "--role", role, "--password", PASSWORD)
+        if self.with_sim:
+            self.start_sim()
+        self.web = self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(self.web_port),
+                                "cyborg_site.asgi:application"], "web")
+        wait_for_port(self.web_port, proc=self.web)
+        return self
+
+    def wait_robot_online(self, timeout: float = 20.0) -> None:
+        """Poll the server until its link reports the robot connected."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                with urllib.request.urlopen(f"{self.url}/healthz", timeout=1) as res:
+                    if b'"connected": true' in res.read():
+                        return
+            except OSError:
+                pass
+            time.sleep(0.1)
+        raise RuntimeError("the server's link never connected to the simulator:\n" + self.log("web")[-3000:])
+
+    def log(self, name: str) -> str:
+        path = self.tmp / f"{name}.log"
+        return path.read_text() if path.exists() else ""
+
+    def _terminate(self, proc: subprocess.Popen) -> None:
+        if proc.poll() is None:
+            try:
+                os.killpg(proc.pid, signal.SIGTERM)
+                proc.wait(5)
+            except (subprocess.TimeoutExpired, ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(5)
+
+    def stop(self) -> None:
+        for proc in reversed(self.procs):
+            self._terminate(proc)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def __enter__(self) -> Stack:
+        try:
+            return self.start()
+        except Exception:
+            self.stop()
+            raise
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
