@@ -52,7 +52,7 @@ async def _is_online() -> bool:
     return bool(status_view(status)["connected"])
 
 
-async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> LinkReply:  # noqa: ASYNC109
+async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> LinkReply:
     """Send one request to the link and wait for its reply; raise RobotError on failure."""
     timeout = timeout or settings.ROBOT_REQUEST_TIMEOUT_S
     request: LinkRequest = {
@@ -96,7 +96,7 @@ async def apublish(key: str, msg: dict[str, Any]) -> None:
     await arequest("publish", topic=t.name, msg_type=t.type, msg=msg)
 
 
-async def acall_service(key: str, args: dict[str, Any] | None = None, *, timeout: float | None = None) -> Any:  # noqa: ASYNC109
+async def acall_service(key: str, args: dict[str, Any] | None = None, *, timeout: float | None = None) -> Any:
     s = ri.service(key)
     reply = await arequest("call_service", service=s.name, service_type=s.type, args=args or {}, timeout=timeout)
     return reply.get("values")

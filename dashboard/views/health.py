@@ -8,4 +8,5 @@ from robot.state import link_status
 def healthz(request):
     """For load balancers and scripts: is the server up, is the robot link connected."""
     status = link_status()
-    return JsonResponse({"ok": True, "connected": status["connected"], "link_running": status.get("link_running", False)})
+    running = status.get("link_running", False)
+    return JsonResponse({"ok": True, "connected": status["connected"], "link_running": running})
