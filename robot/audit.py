@@ -1,0 +1,23 @@
+"""The audit trail: every command anyone sent to the robot, and what came of it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robot.models import AuditEntry
+
+
+def audit_record(
+    *, user: Any, source: str, action: str, params: dict[str, Any], ok: bool, outcome: str = "", error_code: str = ""
+) -> AuditEntry:
+    authenticated = user is not None and getattr(user, "is_authenticated", False)
+    return AuditEntry.objects.create(
+        user=user if authenticated else None,
+        username=user.get_username() if authenticated else "",
+        source=source,
+        action=action,
+        params=params,
+        ok=ok,
+        outcome=outcome[:2000],
+        error_code=error_code,
+    )
