@@ -1,0 +1,216 @@
+"""web_video_server look-alike (MJPEG stream, snapshots) plus the simulator's introspection API.
+
+Routes:
+  GET  /stream?topic=T[&type=mjpeg&quality=Q&width=W&height=H]  multipart MJPEG, ~8 fps
+  GET  /snapshot?topic=T[&quality=Q&width=W&height=H]           one JPEG
+  GET  /stream_viewer?topic=T, GET /                              small HTML pages
+  GET  /sim/introspect                                            SimRobot.snapshot() as JSON
+  GET  /sim/received?topic=T&last=N                               {"count", "messages": [{"t", "msg"}]}
+  POST /sim/publish  {"topic", "msg", "count"?}                   publish to the topic's subscribers
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import logging
+import math
+import time
+from typing import TYPE_CHECKING, Any
+from urllib.parse import parse_qs, urlsplit
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from .server import set_nodelay
+
+if TYPE_CHECKING:
+    from .robot import SimRobot
+
+log = logging.getLogger("robot.sim.camera")
+
+BOUNDARY = "boundarydonotcross"
+FPS = 8.0
+VIEW_M = (8.0, 6.0)  # metres of map shown around the robot
+
+
+class Renderer:
+    """A bird's-eye "camera": the map around the robot, the robot, its plan and a timestamp."""
+
+    def __init__(self, robot: SimRobot) -> None:
+        self.robot = robot
+        self._map_image: Image.Image | None = None
+        self._cache: dict[tuple[int, int, int], tuple[float, bytes]] = {}
+
+    @property
+    def map_image(self) -> Image.Image:
+        if self._map_image is None:
+            g = self.robot.world.grid
+            rgb = np.empty((*g.shape, 3), dtype=np.uint8)
+            rgb[g == -1] = (90, 90, 110)
+            rgb[g == 0] = (235, 235, 225)
+            rgb[g > 0] = (30, 30, 30)
+            self._map_image = Image.fromarray(rgb[::-1])  # image rows run top-down, map rows bottom-up
+        return self._map_image
+
+    def frame(self, width: int = 640, height: int = 480, quality: int = 80) -> bytes:
+        key = (width, height, quality)
+        hit = self._cache.get(key)
+        now = time.monotonic()
+        if hit is not None and now - hit[0] < 1.0 / FPS / 2:
+            return hit[1]
+        data = self._render(width, height, quality)
+        self._cache[key] = (now, data)
+        return data
+
+    def _render(self, width: int, height: int, quality: int) -> bytes:
+        r = self.robot
+        w = r.world
+        b = r.base
+        res = w.resolution
+        cx = (b.x - w.origin_x) / res
+        cy = w.height - (b.y - w.origin_y) / res
+        hw, hh = VIEW_M[0] / res / 2, VIEW_M[1] / res / 2
+        crop = self.map_image.crop((int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)))
+        img = crop.resize((width, height), Image.Resampling.NEAREST)
+        draw = ImageDraw.Draw(img)
+        sx, sy = width / (2 * hw), height / (2 * hh)
+
+        def to_px(x: float, y: float) -> tuple[float, float]:
+            px = ((x - w.origin_x) / res - (int(cx - hw))) * sx
+            py = ((w.height - (y - w.origin_y) / res) - int(cy - hh)) * sy
+            return px, py
+
+        path = [to_px(x, y) for x, y in r.navigator.remaining()]
+        if len(path) > 1:
+            draw.line(path, fill=(40, 120, 230), width=3)
+        px, py = to_px(b.x, b.y)
+        rad = 0.3 / res * sx
+        draw.ellipse((px - rad, py - rad, px + rad, py + rad), fill=(220, 60, 40), outline=(0, 0, 0))
+        draw.line((px, py, px + rad * 1.6 * math.cos(b.yaw), py - rad * 1.6 * math.sin(b.yaw)),
+                  fill=(0, 0, 0), width=3)
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime()) + f".{int(time.time() * 1000) % 1000:03d}"
+        text = f"{stamp}  x={b.x:.2f} y={b.y:.2f} state={r.sm.state} emotion={r.emotions.name}"
+        draw.rectangle((0, 0, width, 16), fill=(0, 0, 0))
+        draw.text((4, 2), text, fill=(255, 255, 255))
+        out = io.BytesIO()
+        img.save(out, "JPEG", quality=max(1, min(95, quality)))
+        return out.getvalue()
+
+
+def _int(q: dict[str, list[str]], name: str, default: int) -> int:
+    try:
+        return int(q.get(name, [default])[0])
+    except ValueError:
+        return default
+
+
+class VideoServer:
+    def __init__(self, robot: SimRobot) -> None:
+        self.robot = robot
+        self.renderer = Renderer(robot)
+        self.server: asyncio.Server | None = None
+        self.port = 0
+        self.writers: set[asyncio.StreamWriter] = set()
+
+    async def start(self, host: str, port: int) -> None:
+        self.server = await asyncio.start_server(self._handle, host, port, reuse_address=True)
+        self.port = self.server.sockets[0].getsockname()[1]
+
+    async def stop(self) -> None:
+        if self.server is None:
+            return
+        self.server.close()
+        for w in list(self.writers):
+            w.transport.abort()
+        try:
+            await asyncio.wait_for(self.server.wait_closed(), 3.0)
+        except TimeoutError:
+            log.warning("video server did not close within 3 s")
+
+    async def _handle(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        set_nodelay(writer.transport)
+        self.writers.add(writer)
+        try:
+            request = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), 10.0)
+            lines = request.decode("latin-1").split("\r\n")
+            method, target, _ = [*lines[0].split(" "), "", ""][:3]
+            headers = {k.strip().lower(): v.strip() for k, _, v in (ln.partition(":") for ln in lines[1:] if ln)}
+            body = b""
+            if int(headers.get("content-length", "0") or 0) > 0:
+                body = await reader.readexactly(int(headers["content-length"]))
+            url = urlsplit(target)
+            await self._route(method, url.path, parse_qs(url.query), body, writer)
+        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError):
+            pass
+        except Exception:
+            log.exception("video server request failed")
+        finally:
+            self.writers.discard(writer)
+            writer.close()
+
+    async def _respond(self, writer: asyncio.StreamWriter, status: str, ctype: str, body: bytes) -> None:
+        writer.write(
+            f"HTTP/1.0 {status}\r\nServer: web_video_server (simulated)\r\nContent-Type: {ctype}\r\n"
+            f"Content-Length: {len(body)}\r\nAccess-Control-Allow-Origin: *\r\nConnection: close\r\n\r\n"
+            .encode() + body
+        )
+        await writer.drain()
+
+    async def _json(self, writer: asyncio.StreamWriter, obj: Any, status: str = "200 OK") -> None:
+        await self._respond(writer, status, "application/json", json.dumps(obj).encode())
+
+    async def _route(self, method: str, path: str, q: dict[str, list[str]], body: bytes,
+                     writer: asyncio.StreamWriter) -> None:
+        robot = self.robot
+        if method == "GET" and path == "/stream":
+            if q.get("type", ["mjpeg"])[0] != "mjpeg":
+                await self._respond(writer, "501 Not Implemented", "text/plain", b"only mjpeg is simulated\n")
+                return
+            await self._stream(writer, _int(q, "width", 640), _int(q, "height", 480), _int(q, "quality", 80))
+        elif method == "GET" and path == "/snapshot":
+            jpeg = await asyncio.to_thread(self.renderer.frame, _int(q, "width", 640), _int(q, "height", 480),
+                                           _int(q, "quality", 80))
+            await self._respond(writer, "200 OK", "image/jpeg", jpeg)
+        elif method == "GET" and path == "/stream_viewer":
+            topic = q.get("topic", [""])[0]
+            html = f"<html><body><h1>{topic}</h1><img src='/stream?topic={topic}'></body></html>"
+            await self._respond(writer, "200 OK", "text/html", html.encode())
+        elif method == "GET" and path == "/":
+            html = "<html><body><h1>Available ROS Image Topics:</h1><ul><li><a href='/stream_viewer?topic=" \
+                   "/videostream'>/videostream</a></li></ul></body></html>"
+            await self._respond(writer, "200 OK", "text/html", html.encode())
+        elif method == "GET" and path == "/sim/introspect":
+            await self._json(writer, robot.snapshot())
+        elif method == "GET" and path == "/sim/received":
+            topic = q.get("topic", [""])[0]
+            last = _int(q, "last", 100)
+            await self._json(writer, {"count": robot.received_count(topic),
+                                      "messages": robot.received_with_times(topic, last)})
+        elif method == "POST" and path == "/sim/publish":
+            try:
+                req = json.loads(body or b"{}")
+                n = robot.publish_external(req["topic"], req.get("msg", {}), int(req.get("count", 1)))
+            except Exception as exc:  # a bench's malformed request: tell it why
+                await self._json(writer, {"error": str(exc)}, "400 Bad Request")
+                return
+            await self._json(writer, {"published": n})
+        else:
+            await self._respond(writer, "404 Not Found", "text/plain", b"not found\n")
+
+    async def _stream(self, writer: asyncio.StreamWriter, width: int, height: int, quality: int) -> None:
+        writer.write(
+            f"HTTP/1.0 200 OK\r\nServer: web_video_server (simulated)\r\nCache-Control: no-cache, no-store, "
+            f"must-revalidate, pre-check=0, post-check=0, max-age=0\r\nPragma: no-cache\r\n"
+            f"Access-Control-Allow-Origin: *\r\nConnection: close\r\n"
+            f"Content-Type: multipart/x-mixed-replace;boundary={BOUNDARY}\r\n\r\n".encode()
+        )
+        while True:
+            jpeg = await asyncio.to_thread(self.renderer.frame, width, height, quality)
+            writer.write(
+                f"--{BOUNDARY}\r\nContent-type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n"
+                f"X-Timestamp: {time.time():.6f}\r\n\r\n".encode() + jpeg + b"\r\n"
+            )
+            await writer.drain()
+            await asyncio.sleep(1.0 / FPS)

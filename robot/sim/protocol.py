@@ -1,0 +1,427 @@
+"""The rosbridge v2 protocol as the ROS 1 rosbridge_server speaks it.
+
+``Broker`` is the simulator's stand-in for the ROS graph (topics, latched messages,
+services); ``Client`` is one websocket connection and its rosbridge session. Frames
+a client gets wrong are logged (ERROR on /rosout from /rosbridge_websocket) and
+dropped: the ROS 1 server never answers with ``status`` frames.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import itertools
+import json
+import logging
+import re
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from . import messages
+
+log = logging.getLogger("robot.sim.rosbridge")
+
+RECEIVED_KEEP = 10_000
+_TYPE_RE = re.compile(r"^[A-Za-z][\w]*/[A-Za-z][\w]*$")
+
+# level, text -> /rosout from /rosbridge_websocket
+LogFn = Callable[[int, str], None]
+ServiceHandler = Callable[[dict[str, Any]], dict[str, Any]]
+
+
+class ProtocolError(Exception):
+    """A frame rosbridge would refuse; logged and dropped."""
+
+
+class ServiceError(Exception):
+    """A service handler failed; the caller gets ``result: false`` with this text."""
+
+
+@dataclass
+class Received:
+    t: float
+    msg: dict[str, Any]
+
+
+@dataclass
+class Subscription:
+    """One client's server-side subscription to a topic, shared by its subscribe ids."""
+
+    client: Client
+    topic: str
+    params: dict[Any, tuple[int, int]] = field(default_factory=dict)  # sid -> (throttle ms, queue length)
+    throttle_s: float = 0.0
+    queue_length: int = 0
+    last_sent: float = 0.0
+    queue: collections.deque[str] | None = None
+    wake: asyncio.Event | None = None
+    pump: asyncio.Task[None] | None = None
+
+    def update(self) -> None:
+        self.throttle_s = min(p[0] for p in self.params.values()) / 1000.0
+        self.queue_length = min(p[1] for p in self.params.values())
+        if self.queue_length > 0:
+            old = list(self.queue or ())
+            self.queue = collections.deque(old, maxlen=self.queue_length)
+            if self.pump is None:
+                self.wake = asyncio.Event()
+                self.pump = asyncio.get_running_loop().create_task(self._run_pump())
+        else:
+            self.stop()
+
+    def offer(self, frame: str) -> None:
+        if self.queue is not None and self.wake is not None:
+            self.queue.append(frame)  # full deque drops the oldest, as rosbridge's queue does
+            self.wake.set()
+            return
+        if self.throttle_s > 0.0:
+            now = time.monotonic()
+            if now - self.last_sent < self.throttle_s:
+                return
+            self.last_sent = now
+        self.client.send(frame)
+
+    async def _run_pump(self) -> None:
+        assert self.wake is not None
+        while True:
+            await self.wake.wait()
+            self.wake.clear()
+            while self.queue:
+                try:
+                    await self.client.send_now(self.queue.popleft())
+                except Exception:  # the connection went away; the session cleanup stops us
+                    return
+                if self.throttle_s > 0.0:
+                    await asyncio.sleep(self.throttle_s)
+
+    def stop(self) -> None:
+        if self.pump is not None:
+            self.pump.cancel()
+        self.pump = self.queue = self.wake = None
+
+
+class Broker:
+    """Topics, types, latched messages and services: the part of ROS the clients see."""
+
+    def __init__(self, log_fn: LogFn) -> None:
+        self.log = log_fn
+        self.types: dict[str, str] = {}
+        self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
+        self.latched: dict[str, str] = {}
+        self.latched_msgs: dict[str, dict[str, Any]] = {}
+        self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}
+        self.handlers: dict[str, list[Callable[[dict[str, Any]], None]]] = collections.defaultdict(list)
+        self.received_msgs: dict[str, collections.deque[Received]] = {}
+        self.received_counts: collections.Counter[str] = collections.Counter()
+        self.services: dict[str, tuple[str, ServiceHandler]] = {}
+        self.client_services: dict[str, tuple[Client, str]] = {}
+        self.clients: dict[int, Client] = {}
+        self.publishers: dict[str, set[int]] = collections.defaultdict(set)
+        self._ids = itertools.count()
+        self._call_ids = itertools.count()
+        self.pending_calls: dict[str, tuple[Client, Any, str]] = {}
+
+    # --- robot side ------------------------------------------------------------------
+
+    def declare(self, topic: str, msg_type: str) -> None:
+        self.types[topic] = msg_type
+
+    def wants(self, topic: str) -> bool:
+        return bool(self.subs.get(topic))
+
+    def publish(self, topic: str, msg: dict[str, Any], latch: bool = False) -> None:
+        subs = self.subs.get(topic)
+        if not subs and not latch:
+            return
+        frame = messages.encode({"op": "publish", "topic": topic, "msg": msg})
+        if latch:
+            self.latched[topic] = frame
+            self.latched_msgs[topic] = msg
+        for sub in list(subs.values()) if subs else ():
+            sub.offer(frame)
+
+    def publish_lazily_latched(self, topic: str, build: Callable[[], dict[str, Any]]) -> None:
+        """A latched topic whose (large) message is only built when someone subscribes."""
+        self.lazy_latched[topic] = build
+
+    def latched_frame(self, topic: str) -> str | None:
+        if topic not in self.latched and topic in self.lazy_latched:
+            msg = self.lazy_latched.pop(topic)()
+            self.latched[topic] = messages.encode({"op": "publish", "topic": topic, "msg": msg})
+            self.latched_msgs[topic] = msg
+        return self.latched.get(topic)
+
+    def on_publish(self, topic: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        self.handlers[topic].append(handler)
+
+    def service(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
+        self.services[name] = (srv_type, handler)
+
+    # --- introspection ---------------------------------------------------------------
+
+    def subscription_count(self, topic: str) -> int:
+        return sum(len(s.params) for s in self.subs.get(topic, {}).values())
+
+    def received(self, topic: str) -> list[Received]:
+        return list(self.received_msgs.get(topic, ()))
+
+    # --- client side -----------------------------------------------------------------
+
+    def connect(self, client: Client) -> None:
+        self.clients[client.id] = client
+
+    def disconnect(self, client: Client) -> None:
+        self.clients.pop(client.id, None)
+        for topic in list(self.subs):
+            sub = self.subs[topic].pop(client.id, None)
+            if sub:
+                sub.stop()
+            if not self.subs[topic]:
+                del self.subs[topic]
+        for pubs in self.publishers.values():
+            pubs.discard(client.id)
+        for name, (owner, _) in list(self.client_services.items()):
+            if owner is client:
+                del self.client_services[name]
+
+    def deliver(self, topic: str, msg: dict[str, Any], latch: bool) -> None:
+        """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
+        q = self.received_msgs.get(topic)
+        if q is None:
+            q = self.received_msgs[topic] = collections.deque(maxlen=RECEIVED_KEEP)
+        q.append(Received(time.time(), msg))
+        self.received_counts[topic] += 1
+        self.publish(topic, msg, latch=latch)
+        for handler in self.handlers.get(topic, ()):
+            try:
+                handler(msg)
+            except Exception:  # a robot node's bug must not kill the client's session
+                log.exception("handler for %s failed", topic)
+
+    def next_call_id(self) -> str:
+        return f"service_request:{next(self._call_ids)}"
+
+    def new_client_id(self) -> int:
+        return next(self._ids)
+
+
+_STR = (str,)
+_INT = (int,)
+_BOOL = (bool,)
+
+
+def _check(frame: dict[str, Any], spec: list[tuple[bool, str, tuple[type, ...]]]) -> None:
+    # rosbridge_library's Capability.basic_type_check (isinstance, so bool passes for int).
+    for mandatory, name, types in spec:
+        if name not in frame:
+            if mandatory:
+                raise ProtocolError(f"Expected a {name} field but none was found.")
+            continue
+        if not isinstance(frame[name], types):
+            names = ", ".join(t.__name__ for t in types)
+            raise ProtocolError(
+                f"Expected field {name} to have one of types ({names}), but it has type "
+                f"{type(frame[name]).__name__}"
+            )
+
+
+class Client:
+    """One websocket client's rosbridge session."""
+
+    OPS = (
+        "advertise", "unadvertise", "publish", "subscribe", "unsubscribe", "call_service",
+        "advertise_service", "unadvertise_service", "service_response", "fragment",
+    )
+
+    def __init__(self, broker: Broker, send: Callable[[str], Any], address: str = "") -> None:
+        self.broker = broker
+        self.id = broker.new_client_id()
+        self.address = address
+        self.connected_at = time.time()
+        self._send = send  # coroutine function: await send(text)
+        self.outbox: collections.deque[str] = collections.deque()
+        self._wake = asyncio.Event()
+        self.closed = False
+        self.fragments: dict[Any, dict[int, str]] = {}
+        self.sent = 0
+
+    # --- output ----------------------------------------------------------------------
+
+    def send(self, frame: str) -> None:
+        if not self.closed:
+            self.outbox.append(frame)
+            self._wake.set()
+
+    async def send_now(self, frame: str) -> None:
+        if not self.closed:
+            await self._send(frame)
+            self.sent += 1
+
+    async def run_writer(self) -> None:
+        while not self.closed:
+            await self._wake.wait()
+            self._wake.clear()
+            while self.outbox:
+                await self._send(self.outbox.popleft())
+                self.sent += 1
+
+    def reply(self, frame: dict[str, Any]) -> None:
+        self.send(messages.encode(frame))
+
+    # --- input -----------------------------------------------------------------------
+
+    def log(self, level: int, text: str, mid: Any = None) -> None:
+        prefix = f"[Client {self.id}]" + (f" [id: {mid}]" if mid is not None else "")
+        self.broker.log(level, f"{prefix} {text}")
+
+    def handle(self, raw: str | bytes) -> None:
+        try:
+            frame = json.loads(raw)
+        except ValueError:
+            self.log(8, f"Unable to deserialize message from client: {str(raw)[:200]}")
+            return
+        if not isinstance(frame, dict) or "op" not in frame:
+            self.log(
+                8, "Received a message without an op.  All messages require 'op' field with value one of: "
+                f"{list(self.OPS)}.  Original message was: {str(raw)[:200]}",
+            )
+            return
+        op, mid = frame["op"], frame.get("id")
+        if op not in self.OPS:
+            self.log(8, f"Unknown operation: {op}.  Allowed operations: {list(self.OPS)}", mid)
+            return
+        try:
+            getattr(self, f"op_{op}")(frame, mid)
+        except (ProtocolError, messages.ConversionError) as exc:
+            self.log(8, f"{op}: {exc}", mid)
+
+    def _topic_type(self, topic: str, claimed: str | None) -> str:
+        known = self.broker.types.get(topic)
+        if claimed is not None and known is not None and claimed != known:
+            raise ProtocolError(
+                f"Tried to register topic {topic} with type {claimed} but it is already established "
+                f"with type {known}"
+            )
+        if claimed is not None and not _TYPE_RE.match(claimed):
+            raise ProtocolError(f"Unable to import msg class {claimed}: invalid message type")
+        if known is None and claimed is None:
+            raise ProtocolError(f"Cannot infer topic type for topic {topic} as it is not yet advertised")
+        return known or claimed  # type: ignore[return-value]
+
+    def op_advertise(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "topic", _STR), (True, "type", _STR), (False, "latch", _BOOL),
+                       (False, "queue_size", _INT)])
+        topic = frame["topic"]
+        self.broker.types[topic] = self._topic_type(topic, frame["type"])
+        self.broker.publishers[topic].add(self.id)
+
+    def op_unadvertise(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "topic", _STR)])
+        self.broker.publishers[frame["topic"]].discard(self.id)
+
+    def op_publish(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "topic", _STR), (False, "latch", _BOOL), (False, "queue_size", _INT)])
+        topic = frame["topic"]
+        msg_type = self._topic_type(topic, None)
+        raw_msg = frame.get("msg", {})
+        if messages.known(msg_type):
+            msg = messages.normalize(msg_type, raw_msg)
+        elif isinstance(raw_msg, dict):
+            msg = raw_msg  # a type the simulator has no schema for: passed through unchecked
+        else:
+            raise messages.ConversionError(f"Expected a dict for a {msg_type} message")
+        self.broker.publishers[topic].add(self.id)
+        self.broker.deliver(topic, msg, bool(frame.get("latch", False)))
+
+    def op_subscribe(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "topic", _STR), (False, "type", _STR), (False, "throttle_rate", _INT),
+                       (False, "fragment_size", _INT), (False, "queue_length", _INT),
+                       (False, "compression", _STR)])
+        topic = frame["topic"]
+        self.broker.types[topic] = self._topic_type(topic, frame.get("type"))
+        subs = self.broker.subs[topic]
+        sub = subs.get(self.id)
+        if sub is None:
+            sub = subs[self.id] = Subscription(self, topic)
+        sub.params[mid] = (max(0, frame.get("throttle_rate", 0)), max(0, frame.get("queue_length", 0)))
+        sub.update()
+        latched = self.broker.latched_frame(topic)
+        if latched is not None:
+            self.send(latched)
+
+    def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "topic", _STR)])
+        topic = frame["topic"]
+        subs = self.broker.subs.get(topic)
+        sub = subs.get(self.id) if subs else None
+        if sub is None:
+            return
+        if mid is None:
+            sub.params.clear()
+        else:
+            sub.params.pop(mid, None)
+        if sub.params:
+            sub.update()
+        else:
+            sub.stop()
+            del subs[self.id]
+            if not subs:
+                del self.broker.subs[topic]
+
+    def op_call_service(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "service", _STR), (False, "fragment_size", _INT), (False, "compression", _STR)])
+        name = frame["service"]
+        args = frame.get("args", {})
+        provider = self.broker.client_services.get(name)
+        if provider is not None:
+            owner, _ = provider
+            call_id = self.broker.next_call_id()
+            self.broker.pending_calls[call_id] = (self, mid, name)
+            owner.reply({"op": "call_service", "id": call_id, "service": name, "args": args})
+            return
+        entry = self.broker.services.get(name)
+        try:
+            if entry is None:
+                raise ServiceError(f"Service {name} does not exist")
+            srv_type, handler = entry
+            request = messages.normalize_request(srv_type, args)
+            values, ok = handler(request), True
+        except (ServiceError, messages.ConversionError) as exc:
+            self.log(8, f"call_service {type(exc).__name__}: {exc}", mid)
+            values, ok = str(exc), False
+        out: dict[str, Any] = {"op": "service_response", "service": name, "values": values, "result": ok}
+        if mid is not None:
+            out["id"] = mid
+        self.reply(out)
+
+    def op_advertise_service(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "service", _STR), (True, "type", _STR)])
+        self.broker.client_services[frame["service"]] = (self, frame["type"])
+
+    def op_unadvertise_service(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "service", _STR)])
+        owner = self.broker.client_services.get(frame["service"])
+        if owner and owner[0] is self:
+            del self.broker.client_services[frame["service"]]
+
+    def op_service_response(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "service", _STR), (True, "result", _BOOL)])
+        pending = self.broker.pending_calls.pop(mid, None)
+        if pending is None:
+            return
+        caller, caller_id, name = pending
+        out: dict[str, Any] = {"op": "service_response", "service": name, "values": frame.get("values", {}),
+                               "result": frame["result"]}
+        if caller_id is not None:
+            out["id"] = caller_id
+        caller.reply(out)
+
+    def op_fragment(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "id", _STR), (True, "data", _STR), (True, "num", _INT), (True, "total", _INT)])
+        parts = self.fragments.setdefault(mid, {})
+        parts[frame["num"]] = frame["data"]
+        if len(parts) == frame["total"]:
+            del self.fragments[mid]
+            self.handle("".join(parts[i] for i in sorted(parts)))

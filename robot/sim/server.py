@@ -1,0 +1,79 @@
+"""The websocket side: accept rosbridge clients and pump frames between them and the Broker."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import socket
+from typing import TYPE_CHECKING, Any
+
+from websockets.asyncio.server import Server, ServerConnection, serve
+from websockets.exceptions import ConnectionClosed
+
+from .protocol import Client
+
+if TYPE_CHECKING:
+    from .robot import SimRobot
+
+log = logging.getLogger("robot.sim.server")
+
+
+def set_nodelay(transport: Any) -> None:
+    sock = transport.get_extra_info("socket") if transport is not None else None
+    if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+class RosbridgeServer:
+    def __init__(self, robot: SimRobot) -> None:
+        self.robot = robot
+        self.server: Server | None = None
+        self.port = 0
+        self.connections: set[ServerConnection] = set()
+
+    async def start(self, host: str, port: int) -> None:
+        # rosbridge: no permessage-deflate, no pings, no practical frame size limit
+        self.server = await serve(
+            self._handle, host, port, compression=None, ping_interval=None, max_size=2**28,
+            max_queue=None, close_timeout=1.0, reuse_address=True,
+        )
+        self.port = self.server.sockets[0].getsockname()[1]
+
+    async def stop(self) -> None:
+        if self.server is None:
+            return
+        self.server.close(close_connections=False)
+        for ws in list(self.connections):
+            ws.transport.abort()  # the robot vanishing: clients see the TCP connection drop
+        try:
+            await asyncio.wait_for(self.server.wait_closed(), 3.0)
+        except TimeoutError:
+            log.warning("websocket server did not close within 3 s")
+
+    async def _handle(self, ws: ServerConnection) -> None:
+        set_nodelay(ws.transport)
+        self.connections.add(ws)
+        broker = self.robot.broker
+        address = ws.remote_address[0] if ws.remote_address else ""
+        client = Client(broker, ws.send, address)
+        broker.connect(client)
+        self.robot.client_connected()
+        writer = asyncio.get_running_loop().create_task(self._write(client))
+        try:
+            async for raw in ws:
+                client.handle(raw)
+        except ConnectionClosed:
+            pass
+        finally:
+            client.closed = True
+            writer.cancel()
+            self.connections.discard(ws)
+            broker.disconnect(client)
+            self.robot.client_connected()
+
+    @staticmethod
+    async def _write(client: Client) -> None:
+        try:
+            await client.run_writer()
+        except ConnectionClosed:
+            pass
