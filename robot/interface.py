@@ -245,6 +245,14 @@ COMMANDER_SEQUENCES: dict[Mode, tuple[Step, ...]] = {
         ("pause", COMMANDER_PAUSE_S), ("event", Event.SUSPEND),
     ),
 }
+# Leaf states inside the behaviour container (incl. the navigation container's leaves).
+# state_change names the leaf entered, so "behaviour_start" reports to_system_state "idle":
+# any of these means the robot is in behaviour mode.
+BEHAVIOUR_STATES: frozenset[str] = frozenset({
+    "idle", "show_off_mea", "conveying_emotional_state", "music_horror", "astrolanguage", "waking_up",
+    "sleepy", "exhausted", "sleeping", "navigation_planning", "navigation_go_to_emotional",
+    "navigation_go_to_schedular", "wandering_emotional",
+})
 # The state each mode should reach, for the requested-vs-reached check.
 MODE_TARGET_STATE: dict[Mode, State] = {
     Mode.BEHAVIOUR: State.BEHAVIOUR,
