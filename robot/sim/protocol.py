@@ -110,7 +110,6 @@ class Broker:
         self.types: dict[str, str] = {}
         self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
         self.latched: dict[str, str] = {}
-        self.latched_msgs: dict[str, dict[str, Any]] = {}
         self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}
         self.handlers: dict[str, list[Callable[[dict[str, Any]], None]]] = collections.defaultdict(list)
         self.received_msgs: dict[str, collections.deque[Received]] = {}
@@ -138,7 +137,6 @@ class Broker:
         frame = messages.encode({"op": "publish", "topic": topic, "msg": msg})
         if latch:
             self.latched[topic] = frame
-            self.latched_msgs[topic] = msg
         for sub in list(subs.values()) if subs else ():
             sub.offer(frame)
 
@@ -150,7 +148,6 @@ class Broker:
         if topic not in self.latched and topic in self.lazy_latched:
             msg = self.lazy_latched.pop(topic)()
             self.latched[topic] = messages.encode({"op": "publish", "topic": topic, "msg": msg})
-            self.latched_msgs[topic] = msg
         return self.latched.get(topic)
 
     def on_publish(self, topic: str, handler: Callable[[dict[str, Any]], None]) -> None:
@@ -296,6 +293,9 @@ class Client:
             getattr(self, f"op_{op}")(frame, mid)
         except (ProtocolError, messages.ConversionError) as exc:
             self.log(8, f"{op}: {exc}", mid)
+        except Exception as exc:  # e.g. an unhashable id: rosbridge logs and carries on too
+            log.exception("frame from client %s failed", self.id)
+            self.log(8, f"{op}: {type(exc).__name__}: {exc}", mid if isinstance(mid, str | int) else None)
 
     def _topic_type(self, topic: str, claimed: str | None) -> str:
         known = self.broker.types.get(topic)

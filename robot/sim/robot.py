@@ -119,6 +119,7 @@ class SimRobot:
         self._tasks: list[asyncio.Task[Any]] = []
         self._started = False
         self._map_load_time = messages.stamp()
+        self.mode = ""  # last robot_mode the commander ran
         self.params: dict[str, Any] = {"/rosdistro": "noetic", "/use_sim_time": False,
                                        "/robot_description": "Pioneer LX (simulated)"}
 
@@ -219,6 +220,8 @@ class SimRobot:
         from .camera import VideoServer
         from .server import RosbridgeServer
 
+        # Encode the latched map now: a 4000 x 4000 map takes seconds, better before than mid-session.
+        self.broker.latched_frame(ri.topic("map").name)
         self.server = RosbridgeServer(self)
         await self.server.start(self.host, self.port)
         self.port = self.server.port
@@ -291,8 +294,6 @@ class SimRobot:
                 "navigating": self.navigator.active,
             },
         }
-
-    mode = ""
 
     # --- publishing helpers ----------------------------------------------------------
 
@@ -817,8 +818,6 @@ class SimRobot:
     def _on_spoken(self, text: str) -> None:
         self.rosout(2, "/cyborg_audio", f"Finished speaking: {text}")
         self._publish("tts_feedback", {"data": text})
-        if self.sm.state == "conveying_emotional_state":
-            pass  # completion is time-based in this simulator
 
     def _on_played(self, clip: str) -> None:
         self._publish("playback_feedback", {"data": clip})

@@ -153,3 +153,21 @@ def test_it_runs_from_the_management_command():
         assert proc.wait(10) == 0
     finally:
         proc.kill()
+
+
+def test_it_lets_roslibpy_reconnect_and_resubscribe_after_a_restart_on_the_same_port():
+    import roslibpy
+
+    first = SimThread(startup_s=0.1).start()
+    port = first.port
+    ros = roslibpy.Ros(first.host, port)
+    ros.run(timeout=10)
+    try:
+        roslibpy.Topic(ros, ri.topic("robot_pose").name, ri.topic("robot_pose").type).subscribe(lambda m: None)
+        wait_until(lambda: first.subscription_count(ri.topic("robot_pose").name) == 1)
+        first.stop()
+        with SimThread(port=port, startup_s=0.1) as second:
+            wait_until(lambda: second.subscription_count(ri.topic("robot_pose").name) == 1, timeout=10,
+                       what="roslibpy re-subscribed")
+    finally:
+        ros.close()

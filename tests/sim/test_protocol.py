@@ -261,3 +261,9 @@ def test_it_answers_the_rosapi_services(sim, raw_client):
     assert "/rosbridge_websocket" in nodes and "/move_base" in nodes
     details = raw.call("/rosapi/message_details", {"type": "geometry_msgs/Twist"}, cid="d")["values"]
     assert {d["type"] for d in details["typedefs"]} == {"geometry_msgs/Twist", "geometry_msgs/Vector3"}
+
+
+def test_it_survives_a_frame_whose_id_is_not_hashable(sim, raw_client):
+    raw = raw_client()
+    raw.send({"op": "subscribe", "id": {"weird": 1}, "topic": CHATTER, "type": "std_msgs/String"})
+    assert raw.call("/rosapi/get_time", cid="alive")["result"] is True
