@@ -169,6 +169,30 @@ TELEOP_MAX_ANGULAR = env_float("TELEOP_MAX_ANGULAR", 1.0, minimum=0)
 
 # --- History (issue 7) -----------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)
+HISTORY_MAX_MESSAGE_BYTES = env_int("HISTORY_MAX_MESSAGE_BYTES", 256 * 1024, minimum=1)
+# The recorder writes every-message topics at most this long after they arrive, in batches.
+HISTORY_FLUSH_S = env_float("HISTORY_FLUSH_S", 0.5, minimum=0.01)
+HISTORY_BATCH_ROWS = env_int("HISTORY_BATCH_ROWS", 5000, minimum=1)
+# Messages waiting for the database beyond this are dropped (and counted, loudly).
+HISTORY_BUFFER_ROWS = env_int("HISTORY_BUFFER_ROWS", 200_000, minimum=1)
+# "thread": the link process writes batches itself; "celery": batches go to the worker (needs REDIS_URL).
+HISTORY_BATCH_WRITER = env_choice("HISTORY_BATCH_WRITER", "thread", ("thread", "celery"))
+HISTORY_POLICY_RELOAD_S = env_float("HISTORY_POLICY_RELOAD_S", 1.0, minimum=0.05)
+HISTORY_SAMPLE_TICK_S = env_float("HISTORY_SAMPLE_TICK_S", 1.0, minimum=0.05)
+HISTORY_PRUNE_EVERY_S = env_float("HISTORY_PRUNE_EVERY_S", 300.0, minimum=1)
+HISTORY_MAX_POINTS = env_int("HISTORY_MAX_POINTS", 2000, minimum=10)
+CELERY_BEAT_SCHEDULE = {
+    "history-sample": {
+        "task": "history.sample",
+        "schedule": HISTORY_SAMPLE_TICK_S,
+        "options": {"expires": HISTORY_SAMPLE_TICK_S * 0.9},
+    },
+    "history-prune": {
+        "task": "history.prune",
+        "schedule": HISTORY_PRUNE_EVERY_S,
+        "options": {"expires": HISTORY_PRUNE_EVERY_S * 0.9},
+    },
+}
 
 # --- API -------------------------------------------------------------------------------
 REST_FRAMEWORK = {

@@ -4,3 +4,12 @@ from django.apps import AppConfig
 class HistoryConfig(AppConfig):
     name = "history"
     default_auto_field = "django.db.models.BigAutoField"
+
+    def ready(self) -> None:
+        from history.recorder import run_recorder
+        from history.sampling import run_schedule
+        from robot.hosting import register_background
+
+        # The recorder runs wherever the link runs; with REDIS_URL, Celery beat samples instead.
+        register_background("history-recorder", run_recorder)
+        register_background("history-schedule", run_schedule, embedded_only=True)

@@ -1,0 +1,92 @@
+"""Recording policies, recorded samples and the downsampling cache."""
+
+from __future__ import annotations
+
+from django.conf import settings
+from django.db import models
+
+
+class RecordingSettings(models.Model):
+    """The one row of global recording settings (edited in the admin, read at run time)."""
+
+    default_interval_s = models.FloatField(
+        default=0.0, help_text="Interval for periodic topics without their own. 0 = the server's default setting."
+    )
+
+    class Meta:
+        verbose_name = verbose_name_plural = "recording settings"
+
+    def __str__(self) -> str:
+        return "Recording settings"
+
+    @classmethod
+    def load(cls) -> RecordingSettings:
+        return cls.objects.get_or_create(pk=1)[0]
+
+    @property
+    def effective_interval_s(self) -> float:
+        return self.default_interval_s if self.default_interval_s > 0 else settings.HISTORY_DEFAULT_INTERVAL_S
+
+
+class Mode(models.TextChoices):
+    OFF = "off", "off"
+    EVERY = "every", "every message"
+    PERIODIC = "periodic", "every N seconds"
+
+
+class TopicPolicy(models.Model):
+    topic = models.CharField(max_length=255, unique=True)
+    msg_type = models.CharField(max_length=255, blank=True)
+    mode = models.CharField(max_length=10, choices=Mode.choices, default=Mode.OFF)
+    interval_s = models.FloatField(
+        null=True, blank=True, help_text="Periodic topics only; empty = the global default interval."
+    )
+    retention_s = models.FloatField(null=True, blank=True, help_text="Delete samples older than this; empty = keep.")
+    max_message_bytes = models.PositiveIntegerField(
+        null=True, blank=True, help_text="Larger messages are not stored; empty = the server's default."
+    )
+    # Compare-and-set marker so concurrent samplers never store the same message twice.
+    last_sampled_t = models.FloatField(default=0.0, editable=False)
+    updated = models.DateTimeField(auto_now=True)
+
+    class Meta:
+        ordering = ["topic"]
+        verbose_name_plural = "topic policies"
+
+    def __str__(self) -> str:
+        return f"{self.topic} ({self.mode})"
+
+
+class Sample(models.Model):
+    topic = models.CharField(max_length=255)
+    msg_type = models.CharField(max_length=255)
+    received_at = models.DateTimeField()
+    data = models.JSONField()
+
+    class Meta:
+        indexes = [models.Index(fields=["topic", "received_at"], name="history_sample_topic_time")]
+
+    def __str__(self) -> str:
+        return f"{self.topic} @ {self.received_at.isoformat()}"
+
+
+class SeriesBucket(models.Model):
+    """One settled min/max bucket of a field's series; buckets sit on a fixed grid per width."""
+
+    topic = models.CharField(max_length=255)
+    field = models.CharField(max_length=255)
+    width_ms = models.BigIntegerField()
+    index = models.BigIntegerField()
+    t_first = models.FloatField(null=True)
+    vmin = models.FloatField(null=True)
+    vmax = models.FloatField(null=True)
+    vsum = models.FloatField(null=True)
+    n = models.IntegerField(default=0)
+
+    class Meta:
+        constraints = [
+            models.UniqueConstraint(fields=["topic", "field", "width_ms", "index"], name="history_bucket_unique")
+        ]
+
+    def __str__(self) -> str:
+        return f"{self.topic} {self.field} [{self.width_ms} ms #{self.index}]"

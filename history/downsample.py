@@ -1,0 +1,146 @@
+"""Downsampled series of one numeric field: min/max buckets computed in the database.
+
+Buckets sit on a fixed grid (width from a ladder of round values, index = floor(epoch /
+width)), so a bucket that can no longer change is cached in ``SeriesBucket`` and later
+requests only scan the open tail. Each bucket keeps its minimum and maximum, so spikes
+survive however far the series is zoomed out.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from datetime import datetime
+
+from django.db import connection
+
+from history.models import Sample, SeriesBucket
+from history.storage import SETTLE_S, utc
+
+_MS = 1, 2, 5, 10, 20, 50, 100, 200, 500
+_S = 1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 10800, 21600, 43200, 86400, 172800, 604800
+WIDTHS_MS: tuple[int, ...] = (*_MS, *(s * 1000 for s in _S), 2592000000)
+
+_SEGMENT = re.compile(r"^(?:[A-Za-z_][A-Za-z0-9_]*|\d+)$")
+_TABLE = Sample._meta.db_table
+
+
+class BadField(ValueError):
+    pass
+
+
+def parse_field(path: str) -> list[str]:
+    """``pose.position.x`` or ``data.0`` → path segments; anything else is refused."""
+    parts = path.split(".") if path else []
+    if not parts or not all(_SEGMENT.match(p) for p in parts):
+        raise BadField(f"{path!r} is not a dotted field path like current_pleasure or pose.position.x")
+    return parts
+
+
+def bucket_width_ms(span_s: float, max_points: int) -> int:
+    for width in WIDTHS_MS:
+        if span_s * 1000 / width <= max_points:
+            return width
+    return WIDTHS_MS[-1]
+
+
+@dataclass
+class Series:
+    topic: str
+    field: str
+    bucket_s: float
+    t: list[float] = field(default_factory=list)  # epoch seconds of each bucket's first sample
+    min: list[float] = field(default_factory=list)
+    max: list[float] = field(default_factory=list)
+    mean: list[float] = field(default_factory=list)
+    count: list[int] = field(default_factory=list)
+
+
+Agg = tuple[float | None, float | None, float | None, float | None, int]  # t_first, min, max, sum, n
+
+
+def _sql(segments: list[str]) -> tuple[str, list]:
+    if connection.vendor == "postgresql":
+        return (
+            "SELECT b, min(t), min(v), max(v), sum(v), count(v) FROM ("
+            " SELECT floor(extract(epoch FROM received_at)::float8 * 1000 / %s)::bigint AS b,"
+            " extract(epoch FROM received_at)::float8 AS t,"
+            " CASE jsonb_typeof(data #> %s) WHEN 'number' THEN (data #>> %s)::float8"
+            " WHEN 'boolean' THEN CASE WHEN (data #>> %s) = 'true' THEN 1.0 ELSE 0.0 END END AS v"
+            f" FROM {_TABLE} WHERE topic = %s AND received_at >= %s AND received_at < %s) x GROUP BY b",
+            [segments, segments, segments],
+        )
+    if connection.vendor == "sqlite":
+        path = "$" + "".join(f"[{p}]" if p.isdigit() else f'."{p}"' for p in segments)
+        return (
+            "SELECT b, min(t), min(v), max(v), sum(v), count(v) FROM ("
+            " SELECT CAST((julianday(received_at) - 2440587.5) * 86400000.0 / %s AS INTEGER) AS b,"
+            " (julianday(received_at) - 2440587.5) * 86400.0 AS t, json_extract(data, %s) AS v"
+            f" FROM {_TABLE} WHERE topic = %s AND received_at >= %s AND received_at < %s"
+            " LIMIT -1) x WHERE typeof(v) IN ('integer', 'real') GROUP BY b",
+            [path],
+        )
+    raise NotImplementedError(f"downsampling is not implemented for {connection.vendor}")
+
+
+def _scan(topic: str, segments: list[str], width: int, lo: int, hi: int) -> dict[int, Agg]:
+    """Aggregate buckets lo..hi (inclusive) straight from the samples."""
+    sql, path_params = _sql(segments)
+    adapt = connection.ops.adapt_datetimefield_value
+    start, end = adapt(utc(lo * width / 1000)), adapt(utc((hi + 1) * width / 1000))
+    with connection.cursor() as cursor:
+        cursor.execute(sql, [width, *path_params, topic, start, end])
+        return {int(b): (t, vmin, vmax, vsum, int(n)) for b, t, vmin, vmax, vsum, n in cursor.fetchall()}
+
+
+def _runs(indexes: list[int], *, max_runs: int = 8) -> list[tuple[int, int]]:
+    runs: list[tuple[int, int]] = []
+    for i in indexes:
+        if runs and runs[-1][1] == i - 1:
+            runs[-1] = (runs[-1][0], i)
+        else:
+            runs.append((i, i))
+    if len(runs) > max_runs:  # one wider scan beats many small ones
+        return [(runs[0][0], runs[-1][1])]
+    return runs
+
+
+def series(*, topic: str, field: str, start: datetime, end: datetime, max_points: int,
+           now: float | None = None) -> Series:
+    """At most ``max_points`` buckets of ``field`` between start and end (bucket edges on the grid)."""
+    segments = parse_field(field)
+    t0, t1 = start.timestamp(), end.timestamp()
+    width = bucket_width_ms(max(t1 - t0, 0.001), max_points)
+    b0, b1 = math.floor(t0 * 1000 / width), math.floor(max(t1 * 1000 - 1, t0 * 1000) / width)
+    settled = math.floor(((now or time.time()) - SETTLE_S) * 1000 / width) - 1
+    cached: dict[int, Agg] = {
+        r.index: (r.t_first, r.vmin, r.vmax, r.vsum, r.n)
+        for r in SeriesBucket.objects.filter(
+            topic=topic, field=field, width_ms=width, index__gte=b0, index__lte=min(b1, settled)
+        )
+    }
+    missing = [i for i in range(b0, b1 + 1) if i not in cached]
+    fresh: dict[int, Agg] = {}
+    for lo, hi in _runs(missing):
+        fresh.update(_scan(topic, segments, width, lo, hi))
+    to_cache = [
+        SeriesBucket(topic=topic, field=field, width_ms=width, index=i, t_first=a[0], vmin=a[1], vmax=a[2],
+                     vsum=a[3], n=a[4])
+        for i in missing if i <= settled
+        for a in [fresh.get(i, (None, None, None, None, 0))]
+    ]
+    SeriesBucket.objects.bulk_create(to_cache, ignore_conflicts=True, batch_size=500)
+    out = Series(topic=topic, field=field, bucket_s=width / 1000)
+    for i in range(b0, b1 + 1):
+        agg = cached.get(i) or fresh.get(i)
+        if agg is None or not agg[4]:
+            continue
+        t, vmin, vmax, vsum, n = agg
+        out.t.append(t)
+        out.min.append(vmin)
+        out.max.append(vmax)
+        out.mean.append(vsum / n)
+        out.count.append(n)
+    return out

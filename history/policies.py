@@ -1,0 +1,67 @@
+"""Recording policies: what to record per topic, read as one snapshot, changed at run time."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from django.conf import settings
+from django.db import transaction
+
+from history.models import Mode, RecordingSettings, TopicPolicy
+
+
+@dataclass(frozen=True)
+class Policy:
+    topic: str
+    msg_type: str
+    mode: str
+    interval_s: float  # effective: the topic's own interval wins over the global default
+    retention_s: float | None
+    max_bytes: int
+    last_sampled_t: float = 0.0
+
+
+def effective_interval(own: float | None, default_s: float) -> float:
+    return own if own is not None and own > 0 else default_s
+
+
+def load_policies() -> dict[str, Policy]:
+    """Every topic's effective policy (topics without a row are not recorded)."""
+    default_s = RecordingSettings.load().effective_interval_s
+    return {
+        p.topic: Policy(
+            topic=p.topic, msg_type=p.msg_type, mode=p.mode,
+            interval_s=effective_interval(p.interval_s, default_s),
+            retention_s=p.retention_s,
+            max_bytes=p.max_message_bytes or settings.HISTORY_MAX_MESSAGE_BYTES,
+            last_sampled_t=p.last_sampled_t,
+        )
+        for p in TopicPolicy.objects.all()
+    }
+
+
+def policy_upsert(*, topic: str, **fields: object) -> TopicPolicy:
+    """Create or change one topic's policy; only the given fields change."""
+    policy, _ = TopicPolicy.objects.get_or_create(topic=topic, defaults={"msg_type": fields.get("msg_type") or ""})
+    for name, value in fields.items():
+        setattr(policy, name, value)
+    policy.full_clean()
+    policy.save()
+    return policy
+
+
+def default_interval_set(*, seconds: float) -> RecordingSettings:
+    row = RecordingSettings.load()
+    row.default_interval_s = seconds
+    row.save()
+    return row
+
+
+@transaction.atomic
+def policies_add_discovered(*, topics: Iterable[tuple[str, str]], mode: str = Mode.OFF) -> list[str]:
+    """Add a policy for each discovered (name, type) that has none yet; return the names added."""
+    known = set(TopicPolicy.objects.values_list("topic", flat=True))
+    new = [TopicPolicy(topic=name, msg_type=msg_type, mode=mode) for name, msg_type in topics if name not in known]
+    TopicPolicy.objects.bulk_create(new, ignore_conflicts=True)
+    return [p.topic for p in new]

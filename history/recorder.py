@@ -1,0 +1,170 @@
+"""The recorder: every message of every-message topics, written in batches off the event loop.
+
+``offer`` is a link listener: it runs on the event-loop thread for every message, so it
+only appends to a bounded buffer. ``run`` (a background service where the link runs)
+swaps the buffer out every ``HISTORY_FLUSH_S`` (or sooner when a batch is full) and
+writes it from a worker thread. It also reloads the policies, subscribes the link to the
+topics they name, and keeps the latest message of each periodic topic in the
+latest-state store for the sampler (Celery beat or the embedded loop).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from asgiref.sync import sync_to_async
+from django.conf import settings
+
+from history.models import Mode
+from history.policies import Policy, load_policies
+from history.sampling import latest_key
+from history.storage import Pending, Row, encode, write_rows
+
+log = logging.getLogger(__name__)
+
+Writer = Callable[[Sequence[Row]], int]
+
+
+class Recorder:
+    def __init__(
+        self,
+        *,
+        writer: Writer = write_rows,
+        flush_s: float | None = None,
+        batch_rows: int | None = None,
+        buffer_rows: int | None = None,
+    ) -> None:
+        self.writer = writer
+        self.flush_s = flush_s or settings.HISTORY_FLUSH_S
+        self.batch_rows = batch_rows or settings.HISTORY_BATCH_ROWS
+        self.buffer_rows = buffer_rows or settings.HISTORY_BUFFER_ROWS
+        self.policies: dict[str, Policy] = {}
+        self.limits: dict[str, int] = {}
+        self.every: frozenset[str] = frozenset()
+        self.periodic: frozenset[str] = frozenset()
+        self.latest: dict[str, dict[str, Any]] = {}
+        self._buffer: list[Pending] = []
+        self._full: asyncio.Event | None = None
+        self._subscribed_by_us: set[str] = set()
+        self.received = self.stored = self.dropped = self.oversize = 0
+
+    # --- on the event-loop thread: never blocks --------------------------------------
+
+    def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        if name in self.every:
+            self.received += 1
+            if len(self._buffer) >= self.buffer_rows:
+                self._drop(name)
+                return
+            self._buffer.append((name, msg_type, msg, t))
+            if len(self._buffer) >= self.batch_rows and self._full is not None:
+                self._full.set()
+        elif name in self.periodic:
+            self.latest[name] = {"key": latest_key(name), "topic": name, "msg_type": msg_type, "msg": msg, "t": t}
+
+    def _drop(self, name: str) -> None:
+        self.dropped += 1
+        if self.dropped == 1 or self.dropped % 1000 == 0:
+            log.error("history: buffer full (%d rows); dropped %d messages so far (last on %s)",
+                      self.buffer_rows, self.dropped, name)
+
+    def apply(self, policies: dict[str, Policy]) -> None:
+        self.policies = policies
+        self.limits = {p.topic: p.max_bytes for p in policies.values()}
+        self.every = frozenset(p.topic for p in policies.values() if p.mode == Mode.EVERY)
+        self.periodic = frozenset(p.topic for p in policies.values() if p.mode == Mode.PERIODIC)
+        for name in set(self.latest) - self.periodic:
+            self.latest.pop(name, None)
+
+    # --- flushing ---------------------------------------------------------------------
+
+    def take(self) -> list[Pending]:
+        pending, self._buffer = self._buffer, []
+        return pending
+
+    def flush_sync(self, pending: Sequence[Pending]) -> int:
+        rows, oversize = encode(pending, self.limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
+        self.oversize += oversize
+        for start in range(0, len(rows), self.batch_rows):
+            self.stored += self.writer(rows[start:start + self.batch_rows])
+        return len(rows)
+
+    async def flush(self) -> int:
+        pending = self.take()
+        if not pending:
+            return 0
+        return await asyncio.to_thread(_in_fresh_connection, self.flush_sync, pending)
+
+    async def run(self, link: Any) -> None:
+        """Background service: reload policies, keep subscriptions, flush batches, publish latest."""
+        self._full = asyncio.Event()
+        if self.offer not in link.listeners:
+            link.listeners.append(self.offer)
+        next_reload = 0.0
+        try:
+            while True:
+                if time.monotonic() >= next_reload:
+                    await self.reload(link)
+                    next_reload = time.monotonic() + settings.HISTORY_POLICY_RELOAD_S
+                try:
+                    await asyncio.wait_for(self._full.wait(), self.flush_s)
+                except TimeoutError:
+                    pass
+                self._full.clear()
+                await self.flush()
+                await self.publish_latest(link.store)
+        finally:
+            if self.offer in link.listeners:
+                link.listeners.remove(self.offer)
+            await self.flush()
+
+    async def reload(self, link: Any) -> None:
+        try:
+            policies = await sync_to_async(load_policies, thread_sensitive=False)()
+        except Exception:
+            log.exception("history: could not load recording policies; keeping the previous ones")
+            return
+        self.apply(policies)
+        wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
+        for name, msg_type in wanted.items():
+            if name not in link.subscribed:
+                link.subscribe(name, msg_type)
+                self._subscribed_by_us.add(name)
+        for name in self._subscribed_by_us - set(wanted):
+            link.unsubscribe(name)
+            self._subscribed_by_us.discard(name)
+
+    async def publish_latest(self, store: Any) -> None:
+        latest, self.latest = self.latest, {}
+        for entry in latest.values():
+            await store.aput(entry["key"], entry)
+
+
+def _in_fresh_connection(fn: Callable[..., int], *args: Any) -> int:
+    from django.db import close_old_connections
+
+    close_old_connections()
+    try:
+        return fn(*args)
+    finally:
+        close_old_connections()
+
+
+# The recorder running in this process, if any (tests and the status view read its counters).
+current: Recorder | None = None
+
+
+async def run_recorder(link: Any) -> None:
+    """The background service registered in ``HistoryConfig.ready``."""
+    global current
+    writer = write_rows
+    if settings.HISTORY_BATCH_WRITER == "celery":
+        from history.tasks import celery_writer
+
+        writer = celery_writer
+    current = Recorder(writer=writer)
+    await current.run(link)

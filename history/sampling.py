@@ -1,0 +1,89 @@
+"""Periodic topics: store the latest message every N seconds, from the latest-state store.
+
+One function for both wirings: the Celery beat task (``history.sample``) and, in the
+embedded default, a loop inside the server process. Safe when several run at once: a
+compare-and-set on the policy row lets exactly one of them store each message.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any
+
+from django.conf import settings
+from django.db import transaction
+
+from history.models import Mode, TopicPolicy
+from history.policies import load_policies
+from history.storage import Pending, encode, write_rows
+
+log = logging.getLogger(__name__)
+
+KEY_PREFIX = "history:"
+
+
+def latest_key(topic: str) -> str:
+    """The latest-state store key the recorder keeps a periodic topic's newest message under."""
+    return f"{KEY_PREFIX}{topic}"
+
+
+def _is_due(t: float, last: float, interval_s: float) -> bool:
+    # Messages arrive with jitter; without a little slack a 5 s topic sampled every 5 s skips periods.
+    slack = min(0.25, interval_s * 0.1)
+    return t > last and t - last >= interval_s - slack
+
+
+def sample_periodic(*, store: Any = None) -> int:
+    """Store the newest message of each periodic topic whose interval has passed; returns rows stored."""
+    if store is None:
+        from robot.state import get_store
+
+        store = get_store()
+    periodic = [p for p in load_policies().values() if p.mode == Mode.PERIODIC]
+    if not periodic:
+        return 0
+    entries = {
+        entry.get("topic"): entry for key, entry in store.get_all().items() if key.startswith(KEY_PREFIX)
+    }
+    due: list[Pending] = []
+    with transaction.atomic():
+        for policy in periodic:
+            entry = entries.get(policy.topic)
+            if entry is None:
+                continue
+            t = float(entry["t"])
+            if not _is_due(t, policy.last_sampled_t, policy.interval_s):
+                continue
+            won = TopicPolicy.objects.filter(topic=policy.topic, last_sampled_t=policy.last_sampled_t).update(
+                last_sampled_t=t
+            )
+            if not won:
+                continue  # another sampler stored it
+            due.append((policy.topic, entry.get("msg_type") or policy.msg_type, entry["msg"], t))
+        limits = {p.topic: p.max_bytes for p in periodic}
+        rows, _ = encode(due, limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
+        return write_rows(rows)
+
+
+async def run_schedule(link: Any) -> None:
+    """Embedded default: the beat schedule (sampling, retention) inside the server process."""
+    import asyncio
+
+    from asgiref.sync import sync_to_async
+
+    from history.retention import prune_expired
+
+    sample = sync_to_async(sample_periodic, thread_sensitive=False)
+    prune = sync_to_async(prune_expired, thread_sensitive=False)
+    next_prune = time.monotonic() + settings.HISTORY_SAMPLE_TICK_S
+    while True:
+        started = time.monotonic()
+        try:
+            await sample(store=link.store)
+            if started >= next_prune:
+                next_prune = started + settings.HISTORY_PRUNE_EVERY_S
+                await prune()
+        except Exception:
+            log.exception("history: periodic sampling or pruning failed")
+        await asyncio.sleep(max(0.05, settings.HISTORY_SAMPLE_TICK_S - (time.monotonic() - started)))
