@@ -111,6 +111,9 @@ USE_TZ = True
 STATIC_URL = "static/"
 STATICFILES_DIRS = [BASE_DIR / "static"]
 STATIC_ROOT = VAR_DIR / "staticfiles"
+# Serve straight from the app and project static folders: no collectstatic step to forget.
+WHITENOISE_USE_FINDERS = True
+WHITENOISE_AUTOREFRESH = DEBUG
 
 # --- Redis: channel layer, Celery broker, latest-state store ---------------------------
 REDIS_URL = env_str("REDIS_URL")
@@ -157,6 +160,8 @@ ROBOT_LINK_EMBEDDED = env_bool("ROBOT_LINK_EMBEDDED", True)
 # --- Commanding (issue 4) --------------------------------------------------------------
 MODE_COMMANDER = env_choice("MODE_COMMANDER", "server", ("server", "robot"))
 COMMAND_THROTTLE_RATE = env_str("COMMAND_THROTTLE_RATE", "120/min")
+# The page flags "requested X, state machine in Y" once a mode request is this old.
+MODE_MISMATCH_GRACE_S = env_float("MODE_MISMATCH_GRACE_S", 3.0, minimum=0.5)
 
 # --- Map and navigation (issue 5) ------------------------------------------------------
 NAVIGATION_BACKEND = env_choice("NAVIGATION_BACKEND", "move_base", ("move_base", "cyborg_navigation"))
@@ -166,6 +171,8 @@ TELEOP_RATE_HZ = env_float("TELEOP_RATE_HZ", 10.0, minimum=1)
 TELEOP_DEADMAN_S = env_float("TELEOP_DEADMAN_S", 0.5, minimum=0.05)
 TELEOP_MAX_LINEAR = env_float("TELEOP_MAX_LINEAR", 0.5, minimum=0)
 TELEOP_MAX_ANGULAR = env_float("TELEOP_MAX_ANGULAR", 1.0, minimum=0)
+# The drive lock frees itself after this long without input (a driver who walked away).
+TELEOP_LOCK_TTL_S = env_float("TELEOP_LOCK_TTL_S", 30.0, minimum=1)
 
 # --- History (issue 7) -----------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
 from dashboard.live import live_frame, status_frame, watchable_keys
+from robot import interface as ri
 from robot.bus import RobotError, arequest
 from robot.groups import STATUS_GROUP, topic_group
 from robot.state import STATUS_KEY, get_store
@@ -22,6 +24,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             await self.close(code=UNAUTHENTICATED)
             return
         self.watching: set[str] = set()
+        self.can_command = await database_sync_to_async(is_operator)(user)
         await self.channel_layer.group_add(STATUS_GROUP, self.channel_name)
         await self.accept()
         status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
@@ -53,11 +56,18 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         for key in new:
             await self.channel_layer.group_add(topic_group(key), self.channel_name)
             self.watching.add(key)
+        for key in new:
+            topic = ri.topic(key)
+            if not topic.monitor:  # subscribed on first demand, once for every watcher
+                try:
+                    await arequest("subscribe", topic=topic.name, msg_type=topic.type, timeout=2)
+                except RobotError as exc:
+                    await self.send_json({"kind": "error", "message": exc.message})
         for entry in (await get_store().aget_many(new)).values():
             await self.send_json(live_frame(entry))
 
     async def _reconnect(self) -> None:
-        if not is_operator(self.scope["user"]):
+        if not self.can_command:
             await self.send_json({"kind": "error", "message": "Only operators can reconnect the robot link."})
             return
         try:

@@ -65,7 +65,7 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
         if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
             reply = await asyncio.wait_for(_direct(hosted, request), timeout)
         else:
-            if op != "reconnect" and not await _is_online():
+            if op not in ("reconnect", "subscribe") and not await _is_online():
                 raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
             reply = await asyncio.wait_for(_via_layer(request), timeout)
     except TimeoutError:

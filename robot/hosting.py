@@ -31,7 +31,7 @@ def register_background(name: str, service: BackgroundService, *, embedded_only:
         _background.append((name, service, embedded_only))
 
 
-async def start_link(*, embedded: bool) -> tuple[RobotLink, list[asyncio.Task]]:
+async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotLink, list[asyncio.Task]]:
     link = RobotLink(
         settings.ROSBRIDGE_URL,
         store=get_store(),
@@ -44,7 +44,7 @@ async def start_link(*, embedded: bool) -> tuple[RobotLink, list[asyncio.Task]]:
     tasks = [
         asyncio.ensure_future(_run_forever(name, service, link))
         for name, service, embedded_only in _background
-        if embedded or not embedded_only
+        if background and (embedded or not embedded_only)
     ]
     log.info("robot link started for %s (%s)", settings.ROSBRIDGE_URL, "embedded" if embedded else "standalone")
     return link, tasks
@@ -66,8 +66,10 @@ def autostart_in_daphne() -> None:
     """In the embedded default, start the link once Daphne's reactor runs."""
     if not settings.EMBEDDED or not settings.ROBOT_LINK_EMBEDDED:
         return
-    if "twisted.internet.reactor" not in sys.modules:
-        return  # not inside Daphne (tests with a communicator, management commands)
+    # Importing Daphne installs its reactor everywhere (tests too); only its server entry
+    # points mean this process is the web server.
+    if not any(name in sys.modules for name in ("daphne.cli", "daphne.management.commands.runserver")):
+        return
     from twisted.internet import reactor
     from twisted.internet.asyncioreactor import AsyncioSelectorReactor
 

@@ -19,9 +19,14 @@ PASSWORD = "correct-horse-battery"
 
 
 def _user(username: str, role: Role):
+    from cyborg_site.roles import role_of
     from dashboard.accounts import create_user
 
-    return create_user(username, role, password=PASSWORD)[0]
+    user = create_user(username, role, password=PASSWORD)[0]
+    # Prime the role cache so async consumers in tests need no query from another thread
+    # (the test's transaction holds SQLite's in-memory tables).
+    role_of(user)
+    return user
 
 
 @pytest.fixture
@@ -98,12 +103,12 @@ def sim():
 
 @pytest.fixture
 async def link(sim, settings):
-    """The robot link hosted on the test's event loop, connected to ``sim``."""
+    """The robot link hosted on the test's event loop, connected to ``sim`` (no background services)."""
     from robot import link as link_module
     from robot.hosting import start_link
 
     settings.ROSBRIDGE_URL = sim.url
-    hosted, tasks = await start_link(embedded=True)
+    hosted, tasks = await start_link(embedded=True, background=False)
     await async_wait_until(lambda: hosted.connected, timeout=10, what="link connected")
     yield hosted
     for task in tasks:
@@ -115,7 +120,8 @@ async def link(sim, settings):
 class LinkThread:
     """The robot link on an event loop in a thread, for synchronous tests (API views)."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, background: bool = False) -> None:
+        self.background = background
         self.loop = asyncio.new_event_loop()
         self.thread = threading.Thread(target=self.loop.run_forever, daemon=True)
         self.link = None
@@ -125,7 +131,9 @@ class LinkThread:
         from robot.hosting import start_link
 
         self.thread.start()
-        self.link, self.tasks = asyncio.run_coroutine_threadsafe(start_link(embedded=True), self.loop).result(10)
+        self.link, self.tasks = asyncio.run_coroutine_threadsafe(
+            start_link(embedded=True, background=self.background), self.loop
+        ).result(10)
         wait_until(lambda: self.link.connected, timeout=10, what="link connected")
         return self.link
 

@@ -1,0 +1,52 @@
+import asyncio
+
+from robot.fanout import Coalescer
+
+
+async def test_it_forwards_the_latest_value_at_the_ui_rate():
+    sent = []
+
+    async def send(value):
+        sent.append(value)
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop())
+    for i in range(100):
+        coalescer.offer("pose", 10.0, i)
+    await asyncio.sleep(0.25)
+    coalescer.close()
+    assert sent[0] == 0, "the first message goes out at once"
+    assert sent[-1] == 99, "the latest value always arrives"
+    assert len(sent) <= 3
+
+
+async def test_it_keeps_every_message_of_event_topics_in_order():
+    sent = []
+
+    async def send(value):
+        sent.append(value)
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop())
+    for i in range(50):
+        coalescer.offer("rosout", None, i)
+    await asyncio.sleep(0.05)
+    coalescer.close()
+    assert sent == list(range(50))
+
+
+async def test_it_bounds_its_backlog_when_the_layer_is_slow():
+    gate = asyncio.Event()
+    sent = []
+
+    async def send(value):
+        await gate.wait()
+        sent.append(value)
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop(), max_backlog=10)
+    for i in range(100):
+        coalescer.offer("rosout", None, i)
+    await asyncio.sleep(0.01)
+    gate.set()
+    await asyncio.sleep(0.05)
+    coalescer.close()
+    assert coalescer.dropped >= 89
+    assert sent[-1] == 99 and len(sent) <= 11

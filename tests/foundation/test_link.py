@@ -1,0 +1,121 @@
+"""The robot link against the simulator: real websocket, unmodified roslibpy."""
+
+import asyncio
+
+import pytest
+
+from robot import interface as ri
+from robot import link as link_module
+from robot.bus import RobotOffline, apublish, arequest
+from tests.helpers import async_wait_until, receive_until, ws_communicator
+
+BATTERY = "battery_soc"
+
+
+async def watch(user, *keys):
+    communicator = ws_communicator(user)
+    connected, _ = await communicator.connect()
+    assert connected
+    await communicator.send_json_to({"action": "watch", "keys": list(keys)})
+    return communicator
+
+
+async def test_it_delivers_robot_updates_to_a_browser_consumer(link, sim, viewer):
+    communicator = await watch(viewer, BATTERY)
+    frame = await receive_until(communicator, lambda f: f["kind"] == "update" and f["key"] == BATTERY, timeout=10)
+    assert 0.0 <= frame["msg"]["data"] <= 1.0
+    status = await receive_until(communicator, lambda f: f["kind"] == "status", timeout=5)
+    assert status["connected"] is True
+    await communicator.disconnect()
+
+
+async def test_it_subscribes_upstream_once_however_many_browsers_watch(link, sim, viewer):
+    communicators = [await watch(viewer, BATTERY, "robot_pose") for _ in range(5)]
+    for communicator in communicators:
+        await receive_until(communicator, lambda f: f["kind"] == "update" and f["key"] == "robot_pose", timeout=10)
+    for key in (BATTERY, "robot_pose", "rosout"):
+        assert sim.robot.subscription_count(ri.topic(key).name) == 1, key
+    for communicator in communicators:
+        await communicator.disconnect()
+
+
+async def test_it_coalesces_high_rate_topics_for_browsers(link, sim, viewer):
+    communicator = await watch(viewer, "tf")
+    loop = asyncio.get_running_loop()
+    start = loop.time()
+    count = 0
+    while loop.time() - start < 2.0:
+        frame = await communicator.receive_json_from(timeout=3)
+        count += frame["kind"] == "update" and frame["key"] == "tf"
+    # /tf is published far faster than its 5 Hz UI rate.
+    assert 3 <= count <= 12
+    await communicator.disconnect()
+
+
+async def test_it_shows_offline_and_resubscribes_when_the_robot_returns(link, sim, viewer):
+    from robot.sim.harness import SimThread
+
+    communicator = await watch(viewer, BATTERY)
+    await receive_until(communicator, lambda f: f["kind"] == "update", timeout=10)
+    port = sim.port
+    await asyncio.get_running_loop().run_in_executor(None, sim.stop)
+    down = await receive_until(communicator, lambda f: f["kind"] == "status" and not f["connected"], timeout=10)
+    assert down["connected"] is False
+    with pytest.raises(RobotOffline):
+        await apublish("register_event", {"data": "aborted"})
+
+    revived = SimThread(port=port, video_port=0, startup_s=0.5)
+    await asyncio.get_running_loop().run_in_executor(None, revived.start)
+    try:
+        await receive_until(communicator, lambda f: f["kind"] == "status" and f["connected"], timeout=15)
+        frame = await receive_until(communicator, lambda f: f["kind"] == "update" and f["key"] == BATTERY, timeout=10)
+        assert frame["msg"]["data"] >= 0
+        assert revived.robot.subscription_count(ri.topic(BATTERY).name) == 1
+        # The refused command was not queued to fire after the reconnect.
+        await asyncio.sleep(0.5)
+        assert revived.robot.received_count(ri.topic("register_event").name) == 0
+    finally:
+        await communicator.disconnect()
+        await asyncio.get_running_loop().run_in_executor(None, revived.stop)
+
+
+async def test_it_relays_requests_over_the_channel_layer(link, sim):
+    # As a web process does when the link runs elsewhere (REDIS_URL): no hosted link here.
+    link_module.current = None
+    try:
+        await arequest("publish", topic=ri.topic("register_event").name, msg_type="std_msgs/String",
+                       msg={"data": "aborted"})
+    finally:
+        link_module.current = link
+    await async_wait_until(lambda: sim.robot.received_count(ri.topic("register_event").name) == 1, timeout=5)
+
+
+async def test_it_drops_requests_that_reach_the_link_after_their_deadline(link, sim):
+    import time
+
+    reply = await link.execute({"op": "publish", "topic": "/x", "msg_type": "std_msgs/String", "msg": {}})
+    assert reply["ok"] is True  # sanity: executes when on time
+    await link._handle({"op": "publish", "topic": ri.topic("register_event").name, "msg_type": "std_msgs/String",
+                        "msg": {"data": "late"}, "deadline": time.time() - 1})
+    await asyncio.sleep(0.3)
+    assert sim.robot.received_count(ri.topic("register_event").name) == 0
+
+
+async def test_it_lets_operators_but_not_viewers_reconnect(link, sim, viewer, operator):
+    as_viewer = await watch(viewer)
+    await as_viewer.send_json_to({"action": "reconnect"})
+    refused = await receive_until(as_viewer, lambda f: f["kind"] == "error")
+    assert "operators" in refused["message"]
+    as_operator = await watch(operator)
+    await as_operator.send_json_to({"action": "reconnect"})
+    await receive_until(as_operator, lambda f: f["kind"] == "notice")
+    await receive_until(as_operator, lambda f: f["kind"] == "status" and f["connected"], timeout=10)
+    await as_viewer.disconnect()
+    await as_operator.disconnect()
+
+
+async def test_it_refuses_to_watch_unknown_or_bulky_topics(link, viewer):
+    communicator = await watch(viewer, "map", "no_such_key")
+    frame = await receive_until(communicator, lambda f: f["kind"] == "error")
+    assert "map" in frame["message"] and "no_such_key" in frame["message"]
+    await communicator.disconnect()
