@@ -48,7 +48,8 @@ async def arun_command(
 ) -> str:
     """Run ``run`` for ``user`` if allowed; audit the outcome; return a human-readable result."""
     record = database_sync_to_async(audit_record)
-    if not allowed(user):
+    # The role check may query the user's groups: never from the event loop itself.
+    if not await database_sync_to_async(allowed)(user):
         error = Forbidden("Your role may not command the robot (operators and admins can).")
         await record(user=user, source=source, action=action, params=params, ok=False,
                      outcome=error.message, error_code=error.code)
