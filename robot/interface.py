@@ -288,3 +288,15 @@ GOAL_STATUS: dict[int, str] = {
     0: "pending", 1: "active", 2: "preempted", 3: "succeeded", 4: "aborted",
     5: "rejected", 6: "preempting", 7: "recalling", 8: "recalled", 9: "lost",
 }
+
+
+_ACTION_TOPIC_TYPES: dict[str, str] = {
+    "goal": "{type}ActionGoal", "cancel": "actionlib_msgs/GoalID", "status": "actionlib_msgs/GoalStatusArray",
+    "feedback": "{type}ActionFeedback", "result": "{type}ActionResult",
+}
+
+
+def action_topic(key: str, suffix: str) -> tuple[str, str]:
+    """(name, type) of one of an action server's topics: suffix goal|cancel|status|feedback|result."""
+    a = action(key)
+    return f"{a.name}/{suffix}", _ACTION_TOPIC_TYPES[suffix].format(type=a.type)

@@ -1,0 +1,52 @@
+from django.conf import settings
+from django.http import FileResponse, Http404, HttpResponseNotModified
+from django.shortcuts import render
+from django.urls import reverse
+from django.views.decorators.http import require_GET
+
+from robot import interface as ri
+from robot.navigation.mapimage import is_version, png_path
+from robot.navigation.selectors import location_list, map_meta
+from robot.navigation.shared import SERVER_KEYS, map_dir
+
+# What the map page watches live, besides the server's own navigation keys.
+MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location")
+
+
+def map_page(request):
+    config = {
+        "keys": [*MAP_PAGE_KEYS, *SERVER_KEYS],
+        "map": map_meta(),
+        "locations": location_list(),
+        "backend": settings.NAVIGATION_BACKEND,
+        "stale_after_s": settings.STALE_AFTER_S,
+        "goal_status": ri.GOAL_STATUS,
+        "urls": {
+            "map": reverse("api-map"),
+            "goal": reverse("api-navigation-goal"),
+            "cancel": reverse("api-navigation-cancel"),
+            "status": reverse("api-navigation-status"),
+            "initial_pose": reverse("api-navigation-initial-pose"),
+            "locations": reverse("api-location-list"),
+        },
+    }
+    return render(request, "dashboard/map.html", {"map_config": config})
+
+
+@require_GET
+def map_image(request, version: str):
+    """A rendered map version: immutable, so browsers cache it for good and revalidate never."""
+    if not is_version(version):
+        raise Http404("no such map version")
+    path = png_path(map_dir(), version)
+    etag = f'"{version}"'
+    if request.headers.get("If-None-Match") == etag and path.exists():
+        response = HttpResponseNotModified()
+    else:
+        try:
+            response = FileResponse(open(path, "rb"), content_type="image/png")
+        except FileNotFoundError:
+            raise Http404("no such map version") from None
+    response["ETag"] = etag
+    response["Cache-Control"] = "public, max-age=31536000, immutable"
+    return response

@@ -1,0 +1,87 @@
+"""Map and navigation API: thin views over ``robot.navigation`` services and selectors."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from asgiref.sync import async_to_sync
+from drf_spectacular.utils import extend_schema
+from rest_framework import permissions, status, viewsets
+from rest_framework.authentication import SessionAuthentication
+from rest_framework.decorators import action, api_view
+from rest_framework.request import Request
+from rest_framework.response import Response
+
+from cyborg_site.roles import is_operator
+from robot.api.serializers_navigation import Goal, LocationSerializer, MapMeta, NavigationStatus, PoseInput
+from robot.models import Location
+from robot.navigation.goals import agoal_cancel, agoal_send, ainitial_pose_set
+from robot.navigation.locations import alocation_go
+from robot.navigation.selectors import map_meta, navigation_status
+
+
+def _source(request: Request) -> str:
+    # The map page posts with its session; scripts use tokens.
+    return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
+
+
+def _data(request: Request) -> dict[str, Any]:
+    return request.data if isinstance(request.data, dict) else request.data.dict()
+
+
+@extend_schema(responses={200: MapMeta}, summary="The latest map's metadata and versioned image URL")
+@api_view(["GET"])
+def map_view(request: Request) -> Response:
+    meta = map_meta()
+    if meta is None:
+        return Response({"detail": "No map has been received from the robot yet.", "code": "no_map"},
+                        status=status.HTTP_404_NOT_FOUND)
+    return Response(meta)
+
+
+@extend_schema(request=PoseInput, responses={200: Goal}, summary="Send a navigation goal (move_base)")
+@api_view(["POST"])
+def goal_view(request: Request) -> Response:
+    return Response(async_to_sync(agoal_send)(user=request.user, source=_source(request), data=_data(request)))
+
+
+@extend_schema(request=None, responses={200: NavigationStatus}, summary="Cancel the current goal")
+@api_view(["POST"])
+def cancel_view(request: Request) -> Response:
+    return Response(async_to_sync(agoal_cancel)(user=request.user, source=_source(request)))
+
+
+@extend_schema(responses={200: NavigationStatus}, summary="The current goal, its status, and the robot's pose")
+@api_view(["GET"])
+def status_view(request: Request) -> Response:
+    return Response(navigation_status())
+
+
+@extend_schema(request=PoseInput, summary="Set the robot's initial pose (/initialpose)")
+@api_view(["POST"])
+def initial_pose_view(request: Request) -> Response:
+    body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=_data(request))
+    return Response(body)
+
+
+class OperatorWrites(permissions.BasePermission):
+    message = "Your role may not change locations (operators and admins can)."
+
+    def has_permission(self, request, view) -> bool:
+        return request.method in permissions.SAFE_METHODS or is_operator(request.user)
+
+
+class LocationViewSet(viewsets.ModelViewSet):
+    """Named locations: everyone lists them, operators create, edit, delete and send the robot there."""
+
+    queryset = Location.objects.all()
+    serializer_class = LocationSerializer
+    lookup_field = "name"
+    lookup_value_regex = r"[A-Za-z0-9_\-]+"
+    permission_classes = [permissions.IsAuthenticated, OperatorWrites]
+
+    @extend_schema(request=None, responses={200: Goal}, summary="Send the robot to this location")
+    @action(detail=True, methods=["post"], permission_classes=[permissions.IsAuthenticated])
+    def go(self, request: Request, name: str) -> Response:
+        # The command pipeline checks the role (and audits refusals), so no permission class here.
+        return Response(async_to_sync(alocation_go)(user=request.user, source=_source(request), name=name))

@@ -1,0 +1,79 @@
+"""Shapes of the map and navigation API (input is checked again by the services)."""
+
+from __future__ import annotations
+
+from asgiref.sync import async_to_sync
+from rest_framework import serializers
+
+from robot.models import Location
+from robot.navigation.locations import acurrent_pose
+
+
+class PoseInput(serializers.Serializer):
+    x = serializers.FloatField(help_text="metres, map frame")
+    y = serializers.FloatField(help_text="metres, map frame")
+    yaw = serializers.FloatField(required=False, default=0.0, help_text="heading in radians (0 = +x, CCW)")
+
+
+class MapOrigin(serializers.Serializer):
+    x = serializers.FloatField()
+    y = serializers.FloatField()
+    yaw = serializers.FloatField()
+
+
+class MapMeta(serializers.Serializer):
+    version = serializers.CharField()
+    width = serializers.IntegerField(help_text="cells")
+    height = serializers.IntegerField(help_text="cells")
+    resolution = serializers.FloatField(help_text="metres per cell")
+    origin = MapOrigin(help_text="map position of the grid's bottom-left corner")
+    frame = serializers.CharField()
+    image_url = serializers.CharField()
+    received = serializers.FloatField(help_text="epoch seconds")
+
+
+class Goal(serializers.Serializer):
+    id = serializers.CharField()
+    action = serializers.CharField(help_text="move_base or navigation")
+    x = serializers.FloatField()
+    y = serializers.FloatField()
+    yaw = serializers.FloatField()
+    location = serializers.CharField(allow_null=True)
+    by = serializers.CharField()
+    sent = serializers.FloatField()
+    status = serializers.CharField(help_text="pending, active, succeeded, aborted, cancelled, cancelling, …")
+    status_text = serializers.CharField()
+
+
+class RobotPose(serializers.Serializer):
+    x = serializers.FloatField()
+    y = serializers.FloatField()
+    yaw = serializers.FloatField()
+
+
+class NavigationStatus(serializers.Serializer):
+    goal = Goal(allow_null=True)
+    robot_pose = RobotPose(allow_null=True)
+    current_location = serializers.CharField(allow_null=True)
+    map_version = serializers.CharField(allow_null=True)
+    backend = serializers.CharField()
+
+
+class LocationSerializer(serializers.ModelSerializer):
+    use_current_pose = serializers.BooleanField(
+        write_only=True, required=False, default=False,
+        help_text="take x, y and yaw from the robot's current pose",
+    )
+
+    class Meta:
+        model = Location
+        fields = ("name", "map_name", "x", "y", "yaw", "threshold", "description", "use_current_pose")
+        extra_kwargs = {"x": {"required": False}, "y": {"required": False}}
+
+    def validate(self, attrs):
+        if attrs.pop("use_current_pose", False):
+            attrs.update(async_to_sync(acurrent_pose)())
+        elif self.instance is None and ("x" not in attrs or "y" not in attrs):
+            field = "x" if "x" not in attrs else "y"
+            raise serializers.ValidationError({field: ["This field is required (or set use_current_pose)."]})
+        return attrs

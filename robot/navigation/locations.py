@@ -1,0 +1,51 @@
+"""Named locations: save the robot's current pose under a name, and send the robot to one."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from channels.db import database_sync_to_async
+from django.conf import settings
+
+from robot.bus import RobotError
+from robot.commanding import InvalidCommand, arun_command
+from robot.models import Location
+from robot.navigation.goals import asend_pose_goal, astart_goal, navigation_goal_message, new_goal_id
+from robot.navigation.selectors import pose_of
+from robot.navigation.shared import aget_state
+from robot.navigation.status import goal_view
+
+
+class LocationNotFound(RobotError):
+    status_code = 404
+    code = "not_found"
+
+
+async def acurrent_pose() -> dict[str, float]:
+    pose = pose_of((await aget_state("robot_pose")).get("robot_pose"))
+    if pose is None:
+        raise InvalidCommand("The robot's pose is not known yet (no /robot_pose received)", field="use_current_pose")
+    return pose
+
+
+async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
+    """Send the robot to a named location: a move_base goal at its pose, or by name to the
+    robot's own navigation action when ``NAVIGATION_BACKEND`` is ``cyborg_navigation``."""
+    sent: dict[str, Any] = {}
+
+    async def run() -> str:
+        location = await database_sync_to_async(Location.objects.filter(name=name).first)()
+        if location is None:
+            raise LocationNotFound(f"No location named {name!r}")
+        if settings.NAVIGATION_BACKEND == "cyborg_navigation":
+            goal_id = new_goal_id()
+            sent.update(await astart_goal(
+                action="navigation", msg=navigation_goal_message(goal_id, location.name), goal_id=goal_id,
+                user=user, x=location.x, y=location.y, yaw=location.yaw, location=location.name))
+            return f"goal {goal_id}: {location.name} by name via the robot's navigation"
+        sent.update(await asend_pose_goal(user=user, x=location.x, y=location.y, yaw=location.yaw,
+                                          location=location.name))
+        return f"goal {sent['id']} sent to {location.name} ({location.x:.2f}, {location.y:.2f})"
+
+    await arun_command(user=user, source=source, action="navigation.go_to", params={"location": name}, run=run)
+    return goal_view(sent, None) or {}

@@ -1,0 +1,142 @@
+"""Render an OccupancyGrid to a PNG once per map version, cached on disk.
+
+The PNG is a palette image whose pixel index is the cell value itself (int8 viewed as
+uint8, so unknown -1 is 255): rendering is a flip and a PNG encode, no per-cell work in
+Python. Beside it a ``.npy`` copy of the grid lets any process (web or link) check cells
+for goal validation with a memory map instead of decoding the image.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import Image
+
+from robot.navigation.transforms import MapGeometry
+
+UNKNOWN = -1
+OCCUPIED_AT = 50  # values at or above this are obstacles (map_server's occupied_thresh 0.65 is stricter)
+KEEP_VERSIONS = 4
+_VERSION_CHARS = frozenset("0123456789abcdef")
+
+UNKNOWN_RGB = (205, 210, 217)
+FREE_RGB = (252, 252, 250)
+OCCUPIED_RGB = (34, 38, 46)
+
+
+def _palette() -> list[int]:
+    table = [UNKNOWN_RGB] * 256
+    for v in range(101):  # free .. occupied, shaded by probability
+        f = v / 100.0
+        table[v] = tuple(round(a + (b - a) * f) for a, b in zip(FREE_RGB, OCCUPIED_RGB, strict=True))
+    return [channel for rgb in table for channel in rgb]
+
+
+PALETTE = _palette()
+
+
+class MapError(ValueError):
+    pass
+
+
+@dataclass(frozen=True)
+class RenderedMap:
+    version: str
+    geometry: MapGeometry
+    png: Path
+    cached: bool  # the image already existed (same map seen before)
+    convert_ms: float
+    render_ms: float
+
+
+def grid_array(msg: dict[str, Any]) -> tuple[MapGeometry, np.ndarray]:
+    """The grid as an int8 array of shape (height, width), row 0 at the map origin."""
+    geometry = MapGeometry.from_info(msg["info"])
+    data = msg.get("data") or []
+    n = geometry.width * geometry.height
+    if n <= 0 or len(data) != n or geometry.resolution <= 0:
+        raise MapError(f"map of {geometry.width}x{geometry.height} cells came with {len(data)} values")
+    arr = np.fromiter(data, dtype=np.int8, count=n)
+    return geometry, arr.reshape(geometry.height, geometry.width)
+
+
+def map_version(geometry: MapGeometry, grid: np.ndarray) -> str:
+    h = hashlib.blake2b(repr(geometry).encode(), digest_size=10)
+    h.update(grid.tobytes())
+    return h.hexdigest()
+
+
+def is_version(text: str) -> bool:
+    return len(text) == 20 and set(text) <= _VERSION_CHARS
+
+
+def png_path(directory: Path, version: str) -> Path:
+    return directory / f"{version}.png"
+
+
+def grid_path(directory: Path, version: str) -> Path:
+    return directory / f"{version}.npy"
+
+
+def encode_png(grid: np.ndarray) -> bytes:
+    import io
+
+    pixels = np.ascontiguousarray(np.flipud(grid)).view(np.uint8)
+    image = Image.frombuffer("P", (grid.shape[1], grid.shape[0]), pixels, "raw", "P", 0, 1)
+    image.putpalette(PALETTE)
+    out = io.BytesIO()
+    image.save(out, "PNG", compress_level=3)
+    return out.getvalue()
+
+
+def _write_atomically(path: Path, write) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        write(f)
+    os.replace(tmp, path)  # readers never see half a file, even with several writers
+
+
+def render_map(msg: dict[str, Any], directory: Path) -> RenderedMap:
+    """Convert, version and (unless this version is on disk already) render ``msg``. Blocking."""
+    t0 = time.perf_counter()
+    geometry, grid = grid_array(msg)
+    version = map_version(geometry, grid)
+    t1 = time.perf_counter()
+    png = png_path(directory, version)
+    cached = png.exists() and grid_path(directory, version).exists()
+    if not cached:
+        directory.mkdir(parents=True, exist_ok=True)
+        _write_atomically(grid_path(directory, version), lambda f: np.save(f, grid, allow_pickle=False))
+        data = encode_png(grid)
+        _write_atomically(png, lambda f: f.write(data))
+        _prune(directory, keep=version)
+    t2 = time.perf_counter()
+    return RenderedMap(version, geometry, png, cached, (t1 - t0) * 1000, (t2 - t1) * 1000)
+
+
+def _prune(directory: Path, *, keep: str) -> None:
+    pngs = sorted(directory.glob("*.png"), key=lambda p: p.stat().st_mtime, reverse=True)
+    for old in pngs[KEEP_VERSIONS:]:
+        if old.stem != keep:
+            for path in (old, grid_path(directory, old.stem)):
+                path.unlink(missing_ok=True)
+
+
+@lru_cache(maxsize=4)
+def _grid(path: Path) -> np.ndarray:
+    return np.load(path, mmap_mode="r", allow_pickle=False)
+
+
+def cell_value(directory: Path, version: str, row: int, col: int) -> int | None:
+    """The value of one cell of a rendered map version; None when that version is not on disk."""
+    path = grid_path(directory, version)
+    if not path.exists():
+        return None
+    return int(_grid(path)[row, col])

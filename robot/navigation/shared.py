@@ -1,0 +1,42 @@
+"""Latest-state keys of the navigation package and how they reach the pages.
+
+These keys are written by the server (not the robot): the map's metadata (the grid itself
+never goes into the store), the goal this server sent last, and the statuses the robot
+reported for recent goals. Pages watch them on the live socket like topic keys.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from channels.layers import get_channel_layer
+from django.conf import settings
+
+from robot.groups import TopicUpdate, topic_group
+from robot.state import get_store
+
+MAP_META_KEY = "map_meta"
+GOAL_KEY = "nav_goal"
+GOAL_STATUS_KEY = "nav_goal_status"
+SERVER_KEYS = (MAP_META_KEY, GOAL_KEY, GOAL_STATUS_KEY)
+
+
+def map_dir() -> Path:
+    return Path(settings.VAR_DIR) / "maps"
+
+
+async def apublish_state(key: str, msg: dict[str, Any], t: float | None = None) -> None:
+    """Store ``msg`` as the latest value of ``key`` and send it to every page watching it."""
+    update: TopicUpdate = {
+        "type": "robot.update", "key": key, "topic": "", "msg_type": "", "msg": msg, "t": t or time.time(),
+    }
+    await get_store().aput(key, dict(update))
+    await get_channel_layer().group_send(topic_group(key), update)
+
+
+async def aget_state(*keys: str) -> dict[str, dict[str, Any]]:
+    """The latest message of each key that has one."""
+    entries = await get_store().aget_many(list(keys))
+    return {k: e["msg"] for k, e in entries.items()}

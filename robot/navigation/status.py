@@ -1,0 +1,53 @@
+"""Goal statuses as the pages show them: actionlib's ten codes folded into a few states."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robot import interface as ri
+
+# pending, active, succeeded, aborted, cancelled (+ cancelling, rejected, lost) for people.
+_STATE_OF_CODE = {
+    0: "pending", 1: "active", 2: "cancelled", 3: "succeeded", 4: "aborted",
+    5: "rejected", 6: "cancelling", 7: "cancelling", 8: "cancelled", 9: "lost",
+}
+TERMINAL_STATES = frozenset({"succeeded", "aborted", "cancelled", "rejected", "lost"})
+KEEP_GOALS = 20
+
+
+def goal_state(code: int) -> str:
+    return _STATE_OF_CODE.get(code, ri.GOAL_STATUS.get(code, f"status {code}"))
+
+
+def merge_statuses(known: dict[str, Any], messages: list[dict[str, Any]], *, now: float) -> dict[str, Any]:
+    """Fold GoalStatusArray messages into ``{"goals": {id: {code, state, text, t}}}``.
+
+    Terminal statuses stay after the robot stops listing them, so a page opened later still
+    sees how the last goal ended. Only the ``KEEP_GOALS`` most recently changed are kept.
+    """
+    goals = {gid: dict(s) for gid, s in known.get("goals", {}).items()}
+    for msg in messages:
+        for item in msg.get("status_list") or []:
+            gid = (item.get("goal_id") or {}).get("id") or ""
+            code = int(item.get("status", 0))
+            if not gid:
+                continue
+            old = goals.get(gid)
+            if old is None or old["code"] != code or old.get("text") != item.get("text", ""):
+                goals[gid] = {"code": code, "state": goal_state(code), "text": item.get("text", ""), "t": now}
+    if len(goals) > KEEP_GOALS:
+        newest = sorted(goals.items(), key=lambda kv: kv[1]["t"], reverse=True)[:KEEP_GOALS]
+        goals = dict(newest)
+    return {"goals": goals}
+
+
+def goal_view(goal: dict[str, Any] | None, statuses: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The current goal with its status; a goal the robot has not listed yet is pending."""
+    if not goal:
+        return None
+    reported = ((statuses or {}).get("goals") or {}).get(goal["id"])
+    state = reported["state"] if reported else "pending"
+    if goal.get("cancel_requested") and state in ("pending", "active"):
+        state = "cancelling"
+    return {**goal, "status": state, "status_text": (reported or {}).get("text", ""),
+            "finished": state in TERMINAL_STATES}

@@ -1,0 +1,271 @@
+// The map page: the server-rendered map image with a live overlay (robot, path, goal,
+// named locations), zoom/pan/pinch, press-drag-release goals and initial poses.
+import { connectLive, csrfToken, notify, postJSON } from "./live.js";
+import { drawOverlay } from "./map/draw.js";
+import { attachGestures } from "./map/gestures.js";
+import { quaternionToYaw, View } from "./map/view.js";
+
+const config = JSON.parse(document.getElementById("map-config").textContent);
+const root = document.getElementById("map-view");
+const img = document.getElementById("map-image");
+const canvas = document.getElementById("map-overlay");
+const ctx = canvas.getContext("2d");
+const canCommand = root.dataset.canCommand === "1";
+const $ = (id) => document.getElementById(id);
+const TERMINAL = new Set(["succeeded", "aborted", "cancelled", "rejected", "lost"]);
+
+const view = new View();
+const state = {
+  robot: null, plan: [], goal: null, statuses: { goals: {} }, currentLocation: "",
+  locations: config.locations, drag: null, mode: "pan",
+};
+let viewFitted = false;
+let drawQueued = false;
+
+// --- drawing ---------------------------------------------------------------------------
+
+function currentGoal() {
+  const goal = state.goal;
+  if (!goal) return null;
+  const reported = state.statuses.goals?.[goal.id];
+  let status = reported ? reported.state : "pending";
+  if (goal.cancel_requested && (status === "pending" || status === "active")) status = "cancelling";
+  return { ...goal, status, status_text: reported?.text || "", finished: TERMINAL.has(status) };
+}
+
+function scheduleDraw() {
+  if (drawQueued) return;
+  drawQueued = true;
+  requestAnimationFrame(() => {
+    drawQueued = false;
+    const dpr = window.devicePixelRatio || 1;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    drawOverlay(ctx, view, { ...state, goal: currentGoal() });
+    if (view.meta && img.complete && img.naturalWidth) root.dataset.ready = "1";
+  });
+}
+
+function applyView() {
+  if (!view.meta) return;
+  img.style.transform = `translate(${view.tx}px, ${view.ty}px) scale(${view.scale})`;
+  img.classList.toggle("pixelated", view.scale >= 2);
+  scheduleDraw();
+}
+
+function resize() {
+  const { width, height } = root.getBoundingClientRect();
+  const dpr = window.devicePixelRatio || 1;
+  canvas.width = Math.round(width * dpr);
+  canvas.height = Math.round(height * dpr);
+  canvas.style.width = `${width}px`;
+  canvas.style.height = `${height}px`;
+  if (view.meta && !viewFitted && img.naturalWidth) { view.fit(width, height); viewFitted = true; }
+  applyView();
+  scheduleDraw();
+}
+
+function fit() {
+  const { width, height } = root.getBoundingClientRect();
+  view.fit(width, height);
+  applyView();
+}
+
+function showMap(meta) {
+  if (!meta || meta.version === root.dataset.mapVersion) return;
+  const sameSize = view.meta && view.meta.width === meta.width && view.meta.height === meta.height;
+  root.dataset.mapVersion = meta.version;
+  $("map-empty").hidden = true;
+  $("map-info").textContent = `${meta.width} × ${meta.height} cells · ${meta.resolution} m/cell`;
+  img.onload = () => {
+    view.meta = meta;
+    if (!sameSize || !viewFitted) { fit(); viewFitted = true; }
+    applyView();
+  };
+  img.src = meta.image_url;
+}
+
+// --- live updates ----------------------------------------------------------------------
+
+const onUpdate = {
+  robot_pose(m) {
+    state.robot = { x: m.position.x, y: m.position.y, yaw: quaternionToYaw(m.orientation) };
+    root.dataset.robotX = state.robot.x.toFixed(3);
+    root.dataset.robotY = state.robot.y.toFixed(3);
+    $("robot-pose").textContent =
+      `x ${state.robot.x.toFixed(2)} m · y ${state.robot.y.toFixed(2)} m · ${(state.robot.yaw * 180 / Math.PI).toFixed(0)}°`;
+  },
+  plan(m) { state.plan = (m.poses || []).map((p) => [p.pose.position.x, p.pose.position.y]); },
+  current_location(m) {
+    state.currentLocation = m.data;
+    $("current-location").textContent = m.data || "(none)";
+  },
+  map_meta(m) { showMap(m); },
+  nav_goal(m) { state.goal = m; renderGoal(); },
+  nav_goal_status(m) { state.statuses = m; renderGoal(); },
+};
+
+function renderGoal() {
+  const goal = currentGoal();
+  const pill = $("goal-status");
+  pill.textContent = goal ? goal.status : "no goal";
+  pill.className = `pill goal-${goal ? goal.status : "none"}`;
+  root.dataset.goalStatus = goal ? goal.status : "";
+  root.dataset.goalId = goal ? goal.id : "";
+  $("goal-target").textContent = goal
+    ? `${goal.location ? goal.location + " · " : ""}x ${goal.x.toFixed(2)} · y ${goal.y.toFixed(2)} · ${(goal.yaw * 180 / Math.PI).toFixed(0)}° (by ${goal.by || "?"})`
+    : "—";
+  $("goal-text").textContent = goal?.status_text || "";
+  scheduleDraw();
+}
+
+// --- commands --------------------------------------------------------------------------
+
+function setMode(mode) {
+  state.mode = mode;
+  root.dataset.mode = mode;
+  document.querySelectorAll("[data-mode]").forEach((b) => b.setAttribute("aria-pressed", String(b.dataset.mode === mode)));
+}
+
+async function sendAim(mode, x, y, yaw) {
+  const url = mode === "pose" ? config.urls.initial_pose : config.urls.goal;
+  try {
+    const res = await postJSON(url, { x, y, yaw });
+    notify(mode === "pose" ? res.detail : `Goal sent to (${x.toFixed(2)}, ${y.toFixed(2)})`, "ok", { timeout: 3000 });
+  } catch (err) {
+    notify(err.message, "error");
+  } finally {
+    state.drag = null;
+    setMode("pan");
+    scheduleDraw();
+  }
+}
+
+function aimAt(start, end) {
+  const [x, y] = view.toMap(start.x, start.y);
+  let yaw;
+  if (end && Math.hypot(end.x - start.x, end.y - start.y) > 6) yaw = view.headingOf(start.x, start.y, end.x, end.y);
+  else yaw = state.robot ? Math.atan2(y - state.robot.y, x - state.robot.x) : 0; // face the way there
+  return { x, y, yaw };
+}
+
+attachGestures(canvas, view, {
+  getMode: () => (view.meta && canCommand ? state.mode : "pan"),
+  onView: applyView,
+  onHover(sx, sy) {
+    if (!view.meta) return;
+    const [x, y] = view.toMap(sx, sy);
+    $("map-cursor").textContent = `x ${x.toFixed(2)} m · y ${y.toFixed(2)} m`;
+  },
+  onLeave() { $("map-cursor").textContent = "—"; },
+  onAim(start, end) {
+    state.drag = start ? { ...aimAt(start, end), mode: state.mode } : null;
+    scheduleDraw();
+  },
+  onRelease(start, end) {
+    const aim = aimAt(start, end);
+    state.drag = { ...aim, mode: state.mode };
+    scheduleDraw();
+    sendAim(state.mode, aim.x, aim.y, aim.yaw);
+  },
+});
+
+document.querySelectorAll("[data-mode]").forEach((b) => b.addEventListener("click", () => setMode(b.dataset.mode)));
+$("zoom-in").onclick = () => { const r = root.getBoundingClientRect(); view.zoomAt(r.width / 2, r.height / 2, 1.4); applyView(); };
+$("zoom-out").onclick = () => { const r = root.getBoundingClientRect(); view.zoomAt(r.width / 2, r.height / 2, 1 / 1.4); applyView(); };
+$("zoom-fit").onclick = () => view.meta && fit();
+$("goal-cancel").onclick = async () => {
+  try { notify((await postJSON(config.urls.cancel)).detail, "info", { timeout: 3000 }); } catch (err) { notify(err.message, "error"); }
+};
+
+// --- named locations -------------------------------------------------------------------
+
+async function request(method, url, body) {
+  const res = await fetch(url, {
+    method, credentials: "same-origin",
+    headers: { "Content-Type": "application/json", "X-CSRFToken": csrfToken() },
+    body: body ? JSON.stringify(body) : undefined,
+  });
+  const data = res.status === 204 ? {} : await res.json().catch(() => ({}));
+  if (!res.ok) throw new Error(data.detail || `Request failed (${res.status})`);
+  return data;
+}
+
+async function reloadLocations() {
+  state.locations = await request("GET", config.urls.locations);
+  renderLocations();
+}
+
+function renderLocations() {
+  const list = $("location-list");
+  const select = $("send-to");
+  list.replaceChildren();
+  select.replaceChildren(new Option("Send to…", ""));
+  for (const loc of state.locations) {
+    select.append(new Option(loc.name, loc.name));
+    const li = document.createElement("li");
+    li.dataset.location = loc.name;
+    const name = document.createElement("span");
+    name.className = "loc-name";
+    name.textContent = loc.name;
+    name.title = loc.description || "";
+    const where = document.createElement("span");
+    where.className = "muted small";
+    where.textContent = `${loc.x.toFixed(2)}, ${loc.y.toFixed(2)}`;
+    const go = button("Go", () => goTo(loc.name), "btn btn-small");
+    const del = button("×", () => removeLocation(loc.name), "btn btn-small");
+    del.setAttribute("aria-label", `Delete ${loc.name}`);
+    li.append(name, where, go, del);
+    list.append(li);
+  }
+  $("locations-empty").hidden = state.locations.length > 0;
+  scheduleDraw();
+}
+
+function button(text, onclick, className) {
+  const b = document.createElement("button");
+  b.type = "button"; b.className = className; b.textContent = text; b.onclick = onclick; b.disabled = !canCommand;
+  return b;
+}
+
+async function goTo(name) {
+  try {
+    await postJSON(`${config.urls.locations}${encodeURIComponent(name)}/go/`);
+    notify(`Sending the robot to ${name}`, "ok", { timeout: 3000 });
+  } catch (err) { notify(err.message, "error"); }
+}
+
+async function removeLocation(name) {
+  if (!confirm(`Delete the location “${name}”?`)) return;
+  try { await request("DELETE", `${config.urls.locations}${encodeURIComponent(name)}/`); await reloadLocations(); } catch (err) { notify(err.message, "error"); }
+}
+
+$("send-to-btn").onclick = () => $("send-to").value && goTo($("send-to").value);
+$("save-pose-form").onsubmit = async (ev) => {
+  ev.preventDefault();
+  const name = $("save-pose-name").value.trim();
+  try {
+    await postJSON(config.urls.locations, { name, use_current_pose: true });
+    $("save-pose-name").value = "";
+    notify(`Saved the robot's pose as ${name}`, "ok", { timeout: 3000 });
+    await reloadLocations();
+  } catch (err) { notify(err.message, "error"); }
+};
+
+// --- start -----------------------------------------------------------------------------
+
+window.cyborgMap = {
+  view, state,
+  // Page coordinates of a map point (tests aim the mouse with this).
+  toClient(x, y) {
+    const r = root.getBoundingClientRect();
+    const [sx, sy] = view.toScreen(x, y);
+    return [r.left + sx, r.top + sy];
+  },
+};
+
+setMode("pan");
+renderLocations();
+renderGoal();
+new ResizeObserver(resize).observe(root);
+showMap(config.map);
+connectLive({ keys: config.keys, onUpdate: (f) => { onUpdate[f.key]?.(f.msg); scheduleDraw(); } });

@@ -1,0 +1,51 @@
+"""Navigation fixtures: a private map folder, and a robot link that also runs the goal tracker."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from robot.navigation.handlers import track_goal_statuses
+from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY
+from robot.state import get_store
+from tests.conftest import LinkThread
+from tests.helpers import wait_until
+
+
+@pytest.fixture(autouse=True)
+def _private_var_dir(settings, tmp_path):
+    settings.VAR_DIR = tmp_path
+
+
+@pytest.fixture
+def nav_link(sim, settings):
+    """The link and its goal-status tracker (not the other background services), once the map arrived."""
+    settings.ROSBRIDGE_URL = sim.url
+    runner = LinkThread()
+    runner.start()
+    tracker = asyncio.run_coroutine_threadsafe(track_goal_statuses(runner.link), runner.loop)
+    try:
+        wait_until(lambda: stored(MAP_META_KEY), timeout=10, what="the map to be rendered")
+        yield runner.link
+    finally:
+        tracker.cancel()
+        runner.stop()
+
+
+def stored(key: str):
+    entry = get_store().get_all().get(key)
+    return entry["msg"] if entry else None
+
+
+def goal_state(client) -> str | None:
+    goal = client.get("/api/navigation/status/").json()["goal"]
+    return goal["status"] if goal else None
+
+
+def wait_goal_state(client, *states: str, timeout: float = 20.0) -> str:
+    return wait_until(lambda: (s := goal_state(client)) in states and s, timeout=timeout,
+                      what=f"goal status in {states}")
+
+
+__all__ = ["GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "stored", "goal_state", "wait_goal_state"]
