@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import time
 from collections import defaultdict
 from collections.abc import Sequence
@@ -15,7 +16,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from django.db import connection, transaction
-from django.db.models import F
+from django.db.models import BigIntegerField, ExpressionWrapper, F
 
 from history.models import Sample, SeriesBucket
 
@@ -90,11 +91,13 @@ def _forget_late_buckets(rows: Sequence[Row]) -> None:
 
 def forget_buckets(*, topic: str, start_ms: float | None = None, end_ms: float | None = None) -> int:
     """Drop cached buckets of ``topic`` that overlap [start_ms, end_ms]."""
+    big = BigIntegerField()
     buckets = SeriesBucket.objects.filter(topic=topic).alias(
-        b_start=F("index") * F("width_ms"), b_end=(F("index") + 1) * F("width_ms")
+        b_start=ExpressionWrapper(F("index") * F("width_ms"), output_field=big),
+        b_end=ExpressionWrapper((F("index") + 1) * F("width_ms"), output_field=big),
     )
     if start_ms is not None:
-        buckets = buckets.filter(b_end__gt=start_ms)
+        buckets = buckets.filter(b_end__gt=math.floor(start_ms))
     if end_ms is not None:
-        buckets = buckets.filter(b_start__lte=end_ms)
+        buckets = buckets.filter(b_start__lte=math.ceil(end_ms))
     return buckets.delete()[0]

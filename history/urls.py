@@ -1,2 +1,8 @@
+from django.urls import path
+
+from history import views
+
 app_name = "history"
-urlpatterns: list = []
+urlpatterns = [
+    path("", views.index, name="index"),
+]

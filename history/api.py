@@ -1,0 +1,125 @@
+"""History API: recording policies, downsampled series, streamed exports, state timeline."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from asgiref.sync import async_to_sync, sync_to_async
+from django.conf import settings
+from django.db import transaction
+from django.http import StreamingHttpResponse
+from drf_spectacular.utils import extend_schema
+from rest_framework import permissions
+from rest_framework.decorators import api_view, permission_classes
+from rest_framework.request import Request
+from rest_framework.response import Response
+
+from cyborg_site.roles import is_admin
+from history import serializers as s
+from history.downsample import series
+from history.export import EXPORTERS, FORMATS
+from history.models import RecordingSettings, TopicPolicy
+from history.policies import default_interval_set, effective_interval, policies_add_discovered, policy_upsert
+from history.selectors import recorded_topics, state_timeline
+from robot import interface as ri
+from robot.bus import acall_service
+
+
+class AdminWrites(permissions.BasePermission):
+    message = "Only admins may change recording policies."
+
+    def has_permission(self, request, view) -> bool:
+        return request.method in permissions.SAFE_METHODS or is_admin(request.user)
+
+
+def _policies() -> dict[str, Any]:
+    settings_row = RecordingSettings.load()
+    default_s = settings_row.effective_interval_s
+    return {
+        "default_interval_s": default_s,
+        "topics": [
+            {"topic": p.topic, "msg_type": p.msg_type, "mode": p.mode, "interval_s": p.interval_s,
+             "effective_interval_s": effective_interval(p.interval_s, default_s), "retention_s": p.retention_s,
+             "max_message_bytes": p.max_message_bytes or settings.HISTORY_MAX_MESSAGE_BYTES}
+            for p in TopicPolicy.objects.all()
+        ],
+    }
+
+
+@extend_schema(methods=["GET"], responses={200: s.PoliciesOut}, summary="Recording policies")
+@extend_schema(methods=["PATCH"], request=s.PoliciesPatch, responses={200: s.PoliciesOut},
+               summary="Change the default interval and/or topics' policies (admins; takes effect within ~1 s)")
+@api_view(["GET", "PATCH"])
+@permission_classes([permissions.IsAuthenticated, AdminWrites])
+def topics_view(request: Request) -> Response:
+    if request.method == "PATCH":
+        body = s.PoliciesPatch(data=request.data)
+        body.is_valid(raise_exception=True)
+        with transaction.atomic():
+            if "default_interval_s" in body.validated_data:
+                default_interval_set(seconds=body.validated_data["default_interval_s"])
+            for item in body.validated_data.get("topics", []):
+                policy_upsert(**item)
+    return Response(_policies())
+
+
+@extend_schema(request=s.DiscoverIn, summary="Add a policy for every topic the robot reports (/rosapi/topics)")
+@api_view(["POST"])
+@permission_classes([permissions.IsAuthenticated, AdminWrites])
+def discover_view(request: Request) -> Response:
+    body = s.DiscoverIn(data=request.data)
+    body.is_valid(raise_exception=True)
+    reply = async_to_sync(acall_service)("rosapi_topics") or {}
+    pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
+    added = policies_add_discovered(topics=pairs, mode=body.validated_data["mode"])
+    return Response({"discovered": len(pairs), "added": added})
+
+
+@extend_schema(parameters=[s.SeriesIn], responses={200: s.SeriesOut},
+               summary="A numeric field over time, downsampled to at most max_points min/max buckets")
+@api_view(["GET"])
+def samples_view(request: Request) -> Response:
+    q = s.SeriesIn(data=request.query_params)
+    q.is_valid(raise_exception=True)
+    v = q.validated_data
+    result = series(topic=v["topic"], field=v["field"], start=v["start"], end=v["end"],
+                    max_points=v.get("max_points") or settings.HISTORY_MAX_POINTS)
+    return Response(vars(result))
+
+
+@extend_schema(parameters=[s.ExportIn], responses={(200, "application/octet-stream"): bytes},
+               summary="Stream a topic's samples as CSV, JSON Lines or MCAP (JSON encoding, opens in Foxglove)")
+@api_view(["GET"])
+def export_view(request: Request) -> StreamingHttpResponse:
+    q = s.ExportIn(data=request.query_params)
+    q.is_valid(raise_exception=True)
+    v = q.validated_data
+    content_type, ext = FORMATS[v["format"]]
+    chunks = EXPORTERS[v["format"]](v["topic"], v["start"], v["end"])
+    response = StreamingHttpResponse(_async_chunks(chunks), content_type=content_type)
+    name = v["topic"].strip("/").replace("/", "_") or "topic"
+    response["Content-Disposition"] = f'attachment; filename="{name}-{v["start"]:%Y%m%dT%H%M%S}.{ext}"'
+    return response
+
+
+async def _async_chunks(chunks):
+    # Under ASGI a sync iterator would be read into memory whole; pull it chunk by chunk instead.
+    step = sync_to_async(next, thread_sensitive=True)
+    done = object()
+    while (chunk := await step(chunks, done)) is not done:
+        yield chunk
+
+
+@extend_schema(summary="Recorded topics with their plottable fields")
+@api_view(["GET"])
+def recorded_view(request: Request) -> Response:
+    return Response({"topics": recorded_topics()})
+
+
+@extend_schema(summary="Time spent per state-machine state, from recorded state changes")
+@api_view(["GET"])
+def timeline_view(request: Request) -> Response:
+    q = s.RangeIn(data={**request.query_params.dict(), "topic": ri.topic("state_change").name})
+    q.is_valid(raise_exception=True)
+    t = state_timeline(start=q.validated_data["start"], end=q.validated_data["end"])
+    return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals})

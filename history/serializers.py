@@ -1,0 +1,105 @@
+"""API input/output shapes for history."""
+
+from __future__ import annotations
+
+import time
+from datetime import datetime, timedelta
+
+from django.conf import settings
+from django.utils.dateparse import parse_datetime
+from rest_framework import serializers
+
+from history.downsample import BadField, parse_field
+from history.export import FORMATS
+from history.models import Mode
+from history.storage import utc
+
+DEFAULT_SPAN = timedelta(hours=1)
+
+
+def parse_time(value: str, *, name: str) -> datetime:
+    """ISO 8601 (naive = UTC) or epoch seconds."""
+    try:
+        return utc(float(value))
+    except ValueError:
+        pass
+    parsed = parse_datetime(value.replace(" ", "+")) if value else None
+    if parsed is None:
+        raise serializers.ValidationError({name: f"{value!r} is not an ISO 8601 time or epoch seconds"})
+    return parsed if parsed.tzinfo else parsed.replace(tzinfo=utc(0).tzinfo)
+
+
+class RangeIn(serializers.Serializer):
+    topic = serializers.CharField(max_length=255)
+    start = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: an hour before end")
+    end = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: now")
+
+    def validate(self, attrs: dict) -> dict:
+        end = parse_time(attrs["end"], name="end") if attrs.get("end") else utc(time.time())
+        start = parse_time(attrs["start"], name="start") if attrs.get("start") else end - DEFAULT_SPAN
+        if start >= end:
+            raise serializers.ValidationError({"start": "start must be before end"})
+        return {**attrs, "start": start, "end": end}
+
+
+class SeriesIn(RangeIn):
+    field = serializers.CharField(max_length=255, help_text="Dotted path, e.g. current_pleasure or pose.position.x")
+    max_points = serializers.IntegerField(required=False, min_value=2)
+
+    def validate_field(self, value: str) -> str:
+        try:
+            parse_field(value)
+        except BadField as exc:
+            raise serializers.ValidationError(str(exc)) from None
+        return value
+
+    def validate_max_points(self, value: int) -> int:
+        return min(value, settings.HISTORY_MAX_POINTS)
+
+
+class ExportIn(RangeIn):
+    format = serializers.ChoiceField(choices=sorted(FORMATS), default="csv")
+
+
+class SeriesOut(serializers.Serializer):
+    topic = serializers.CharField()
+    field = serializers.CharField()
+    bucket_s = serializers.FloatField(help_text="Bucket width; each point is one bucket's min, max, mean, count")
+    t = serializers.ListField(child=serializers.FloatField(), help_text="Epoch seconds of each bucket's first sample")
+    min = serializers.ListField(child=serializers.FloatField())
+    max = serializers.ListField(child=serializers.FloatField())
+    mean = serializers.ListField(child=serializers.FloatField())
+    count = serializers.ListField(child=serializers.IntegerField())
+
+
+class PolicyIn(serializers.Serializer):
+    topic = serializers.CharField(max_length=255)
+    msg_type = serializers.CharField(max_length=255, required=False, allow_blank=True)
+    mode = serializers.ChoiceField(choices=Mode.values, required=False)
+    interval_s = serializers.FloatField(required=False, allow_null=True, min_value=0.05)
+    retention_s = serializers.FloatField(required=False, allow_null=True, min_value=1)
+    max_message_bytes = serializers.IntegerField(required=False, allow_null=True, min_value=1)
+
+
+class PoliciesPatch(serializers.Serializer):
+    default_interval_s = serializers.FloatField(required=False, min_value=0.05)
+    topics = PolicyIn(many=True, required=False)
+
+
+class PolicyOut(serializers.Serializer):
+    topic = serializers.CharField()
+    msg_type = serializers.CharField()
+    mode = serializers.CharField()
+    interval_s = serializers.FloatField(allow_null=True, help_text="The topic's own interval (null = default)")
+    effective_interval_s = serializers.FloatField()
+    retention_s = serializers.FloatField(allow_null=True)
+    max_message_bytes = serializers.IntegerField()
+
+
+class PoliciesOut(serializers.Serializer):
+    default_interval_s = serializers.FloatField()
+    topics = PolicyOut(many=True)
+
+
+class DiscoverIn(serializers.Serializer):
+    mode = serializers.ChoiceField(choices=Mode.values, default=Mode.OFF)
