@@ -1,1 +1,7 @@
-websocket_urlpatterns: list = []
+from django.urls import path
+
+from dashboard.consumers_teleop import TeleopConsumer
+
+websocket_urlpatterns = [
+    path("ws/teleop/", TeleopConsumer.as_asgi()),
+]

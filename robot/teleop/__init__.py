@@ -1,0 +1,1 @@
+"""Manual driving: input → clamped Twist, the drive lock, the per-connection loop, the e-stop."""

@@ -1,0 +1,92 @@
+"""Drive-lock services: take, take over and give up the lock, each audited and announced
+to every open drive page (in every web process) through one channel group."""
+
+from __future__ import annotations
+
+from typing import Any, Literal, TypedDict
+
+from channels.db import database_sync_to_async
+from channels.layers import get_channel_layer
+
+from cyborg_site.roles import is_admin
+from robot.audit import audit_record
+from robot.bus import RobotError
+from robot.commanding import Busy, arun_command
+from robot.teleop.lock import DriveLock, Holder, get_lock
+from robot.teleop.session import publish_cmd_vel
+from robot.teleop.twist import STOP
+
+LOCK_GROUP = "teleop.lock"
+
+
+class LockEvent(TypedDict):
+    type: Literal["teleop.lock"]
+    holder: str | None  # username
+    owner: str | None  # the holding connection
+    reason: str  # acquire | takeover | release | disconnect | timeout | estop
+
+
+async def announce(holder: Holder | None, reason: str) -> None:
+    event: LockEvent = {
+        "type": "teleop.lock", "holder": holder.username if holder else None,
+        "owner": holder.owner if holder else None, "reason": reason,
+    }
+    await get_channel_layer().group_send(LOCK_GROUP, event)
+
+
+async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock: DriveLock | None = None) -> Holder:
+    """Take the free lock for ``me``; Busy if another connection drives."""
+    lock = lock or get_lock()
+
+    async def run() -> str:
+        current = await lock.acquire(me)
+        if current != me:
+            raise Busy(f"{current.username} is driving.")
+        await announce(me, "acquire")
+        return "drive lock taken"
+
+    await arun_command(user=user, source=source, action="teleop.lock", params={}, run=run)
+    return me
+
+
+async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", lock: DriveLock | None = None) -> Holder:
+    """An admin takes the lock from whoever holds it; the robot is stopped first."""
+    lock = lock or get_lock()
+    previous: Holder | None = None
+
+    async def run() -> str:
+        nonlocal previous
+        previous = await lock.take(me)
+        await announce(me, "takeover")
+        if previous is None or previous == me:
+            return "drive lock taken (it was free)"
+        try:
+            await publish_cmd_vel(STOP)
+        except RobotError as exc:
+            return f"took the drive lock from {previous.username}; zero velocity not sent: {exc.message}"
+        return f"took the drive lock from {previous.username}"
+
+    await arun_command(user=user, source=source, action="teleop.takeover", params={}, run=run, allowed=is_admin)
+    return me
+
+
+async def lock_release(*, user: Any, me: Holder, reason: str, source: str = "websocket",
+                       lock: DriveLock | None = None) -> bool:
+    """Give up the lock if ``me`` holds it (unlock, disconnect); True if it was held."""
+    lock = lock or get_lock()
+    if not await lock.release(me):
+        return False
+    await announce(None, reason)
+    await database_sync_to_async(audit_record)(
+        user=user, source=source, action="teleop.unlock", params={"reason": reason}, ok=True,
+        outcome=f"drive lock freed ({reason})",
+    )
+    return True
+
+
+async def teleop_record(*, user: Any, action: str, outcome: str, ok: bool = True, params: dict | None = None) -> None:
+    """Audit a teleop event that is not a command (deadman stop, refused input)."""
+    await database_sync_to_async(audit_record)(
+        user=user, source="websocket", action=action, params=params or {}, ok=ok, outcome=outcome,
+        error_code="" if ok else "refused",
+    )

@@ -1,0 +1,19 @@
+import pytest
+
+
+@pytest.fixture(autouse=True)
+def _free_drive_lock(settings):
+    """Every test starts with nobody driving (the Redis lock outlives a test otherwise)."""
+    from robot.teleop.lock import reset_lock
+
+    def clear():
+        reset_lock()
+        if settings.REDIS_URL:
+            import redis
+
+            prefix = settings.CHANNEL_LAYERS["default"]["CONFIG"].get("prefix", "cyborg")
+            redis.Redis.from_url(settings.REDIS_URL).delete(f"{prefix}:teleop-lock")
+
+    clear()
+    yield
+    clear()
