@@ -1,2 +1,8 @@
-# Page routes (see the issue that owns this page).
-urlpatterns: list = []
+# Page routes (issue 4: the command log).
+from django.urls import path
+
+from dashboard.views.activity import activity
+
+urlpatterns = [
+    path("activity/", activity, name="activity"),
+]

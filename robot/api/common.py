@@ -1,0 +1,48 @@
+"""Pieces every API view of the commanding endpoints shares: auth order, throttle, error docs."""
+
+from __future__ import annotations
+
+from django.conf import settings
+from drf_spectacular.utils import OpenApiResponse, inline_serializer
+from rest_framework import serializers
+from rest_framework.authentication import SessionAuthentication, TokenAuthentication
+from rest_framework.throttling import ScopedRateThrottle
+
+# Token first: an anonymous caller gets 401 with ``WWW-Authenticate: Token`` (not a bare 403).
+API_AUTHENTICATION = [TokenAuthentication, SessionAuthentication]
+
+
+class CommandThrottle(ScopedRateThrottle):
+    """Per-user rate limit on commands (``COMMAND_THROTTLE_RATE``), read at request time."""
+
+    def get_rate(self) -> str | None:
+        return settings.COMMAND_THROTTLE_RATE
+
+
+def source_of(request) -> str:
+    """Audit source: the pages post with the session; scripts authenticate with a token."""
+    return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
+
+
+ErrorOut = inline_serializer(
+    name="Error",
+    fields={
+        "detail": serializers.CharField(help_text="What went wrong, for a person."),
+        "code": serializers.CharField(help_text="invalid, forbidden, busy, offline, timeout, failed, throttled…"),
+        "field": serializers.CharField(required=False, help_text="The input field at fault (400 only)."),
+    },
+)
+
+
+def error_responses(*codes: int) -> dict[int, OpenApiResponse]:
+    meaning = {
+        400: "Invalid input; `field` names the field. Nothing was sent.",
+        401: "Not authenticated.",
+        403: "Your role may not command the robot (viewers). Nothing was sent.",
+        409: "Another mode change is in progress.",
+        429: "Too many commands; slow down.",
+        502: "The robot refused (e.g. a failed service call).",
+        503: "Robot offline. Nothing was sent or queued.",
+        504: "The robot did not answer in time.",
+    }
+    return {code: OpenApiResponse(ErrorOut, description=meaning[code]) for code in codes}

@@ -1,0 +1,25 @@
+"""Motors on/off through the RosAria services; the caller sees the service's own answer."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robot import bus
+from robot import interface as ri
+from robot.commanding import arun_command
+from robot.commands.validation import clean_bool
+
+
+async def aset_motors(*, user: Any, source: str, enabled: Any) -> str:
+    async def run() -> str:
+        on = clean_bool(enabled, "enabled")
+        key = "enable_motors" if on else "disable_motors"
+        try:
+            await bus.acall_service(key)
+        except bus.RobotError as exc:
+            if type(exc) is bus.RobotError:  # a failed service_response: say which service refused
+                raise bus.RobotError(f"{ri.service(key).name} failed: {exc.message}") from exc
+            raise
+        return f"Motors {'enabled' if on else 'disabled'} ({ri.service(key).name} ok)"
+
+    return await arun_command(user=user, source=source, action="motors", params={"enabled": enabled}, run=run)

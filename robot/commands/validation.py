@@ -1,0 +1,82 @@
+"""Input checks shared by every command source (page, API, websocket).
+
+Each ``clean_*`` returns the value to send or raises ``InvalidCommand`` naming the field.
+Preset lookups hit the database, so they are async.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from channels.db import database_sync_to_async
+
+from robot import interface as ri
+from robot.commanding import InvalidCommand
+from robot.models import DomeMode, EmotionPreset, SoundClip
+
+EVENT_MAX = 64
+SPEECH_MAX = 500
+_EVENT_RE = re.compile(r"^[A-Za-z0-9_]+$")
+MODE_NAMES = tuple(m.short for m in ri.Mode)
+
+
+def _text(value: Any, field: str) -> str:
+    if not isinstance(value, str):
+        raise InvalidCommand(f"{field}: a text value is required.", field=field)
+    return value.strip()
+
+
+def clean_event(value: Any) -> str:
+    event = _text(value, "event")
+    if not event:
+        raise InvalidCommand("event: name an event (e.g. aborted).", field="event")
+    if len(event) > EVENT_MAX:
+        raise InvalidCommand(f"event: at most {EVENT_MAX} characters.", field="event")
+    if not _EVENT_RE.match(event):
+        raise InvalidCommand("event: use letters, digits and '_' only.", field="event")
+    return event
+
+
+def clean_speech(value: Any) -> str:
+    text = _text(value, "text")
+    if not text:
+        raise InvalidCommand("text: say something (the text is empty).", field="text")
+    if len(text) > SPEECH_MAX:
+        raise InvalidCommand(f"text: at most {SPEECH_MAX} characters (got {len(text)}).", field="text")
+    return text
+
+
+def clean_bool(value: Any, field: str) -> bool:
+    if not isinstance(value, bool):
+        raise InvalidCommand(f"{field}: true or false is required.", field=field)
+    return value
+
+
+def clean_mode(value: Any) -> ri.Mode:
+    name = _text(value, "mode")
+    try:
+        return ri.Mode.from_short(name)
+    except ValueError:
+        raise InvalidCommand(f"mode: one of {', '.join(MODE_NAMES)}.", field="mode") from None
+
+
+async def _preset(model: type, value: Any, field: str, what: str) -> str:
+    name = _text(value, field)
+    exists = await database_sync_to_async(model.objects.filter(name=name).exists)() if name else False
+    if not exists:
+        names = await database_sync_to_async(lambda: list(model.objects.values_list("name", flat=True)))()
+        raise InvalidCommand(f"{field}: unknown {what} {name!r}; known: {', '.join(names) or 'none'}.", field=field)
+    return name
+
+
+async def clean_emotion(value: Any) -> str:
+    return await _preset(EmotionPreset, value, "emotion", "emotion")
+
+
+async def clean_clip(value: Any) -> str:
+    return await _preset(SoundClip, value, "clip", "sound clip")
+
+
+async def clean_dome_mode(value: Any) -> str:
+    return await _preset(DomeMode, value, "mode", "dome mode")

@@ -1,0 +1,2 @@
+# The commanding fixtures (fresh throttle counts, a ready simulated robot) serve the API tests too.
+from tests.commands.conftest import _fresh_throttle_counts, robot  # noqa: F401

@@ -1,0 +1,60 @@
+"""Helpers for the commanding tests: what reached the simulated robot, and audit lookups."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robot import interface as ri
+from robot.models import AuditEntry
+from tests.helpers import wait_until
+
+# Every topic a command may publish on.
+COMMAND_TOPICS = ("robot_mode", "register_event", "emotional_controller", "set_emotional_state",
+                  "text_to_speech", "playback", "domecontrol")
+
+# (path, valid body) for every command endpoint.
+ENDPOINTS: dict[str, dict[str, Any]] = {
+    "/api/robot/mode/": {"mode": "manual"},
+    "/api/robot/event/": {"event": "aborted"},
+    "/api/robot/speech/": {"text": "hello"},
+    "/api/robot/emotion/": {"emotion": "angry"},
+    "/api/robot/emotion-system/": {"on": False},
+    "/api/robot/motors/": {"enabled": False},
+    "/api/robot/playback/": {"clip": "hello_there"},
+    "/api/robot/dome/": {"mode": "rainbow"},
+}
+
+
+def received(sim, key: str) -> list[dict[str, Any]]:
+    return sim.received(ri.topic(key).name)
+
+
+def motor_calls(sim) -> int:
+    """The simulated RosAria logs every motors service call it serves."""
+    log = sim.call(lambda: list(sim.robot.rosout_log))
+    return sum(1 for m in log if m["name"] == "/RosAria" and m["msg"].startswith("Motors "))
+
+
+def sent_to_robot(sim) -> dict[str, int]:
+    counts = {key: sim.received_count(ri.topic(key).name) for key in COMMAND_TOPICS}
+    counts["motors"] = motor_calls(sim)
+    return counts
+
+
+def nothing_sent(sim) -> bool:
+    return not any(sent_to_robot(sim).values())
+
+
+def wait_state(sim, predicate, what: str, timeout: float = 10.0) -> dict[str, Any]:
+    return wait_until(lambda: (s := sim.snapshot()["state"]) and predicate(s) and s, timeout=timeout, what=what)
+
+
+def wait_ready(sim) -> None:
+    """Startup finished: the state machine waits in suspension."""
+    wait_state(sim, lambda s: s["smach_state"] == "suspension", "startup to finish")
+
+
+def last_audit() -> AuditEntry:
+    entry = AuditEntry.objects.first()
+    assert entry is not None, "no audit entry was written"
+    return entry
