@@ -8,7 +8,7 @@ from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
-from dashboard.live import live_frame, status_frame, watchable_keys
+from dashboard.live import SERVER_KEYS, live_frame, status_frame, watchable_keys
 from robot import interface as ri
 from robot.bus import RobotError, arequest
 from robot.groups import STATUS_GROUP, topic_group
@@ -57,14 +57,21 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             await self.channel_layer.group_add(topic_group(key), self.channel_name)
             self.watching.add(key)
         for key in new:
+            if key in SERVER_KEYS:  # written by the server itself: no ROS topic to subscribe
+                continue
             topic = ri.topic(key)
             if not topic.monitor:  # subscribed on first demand, once for every watcher
                 try:
                     await arequest("subscribe", topic=topic.name, msg_type=topic.type, timeout=2)
                 except RobotError as exc:
                     await self.send_json({"kind": "error", "message": exc.message})
-        for entry in (await get_store().aget_many(new)).values():
-            await self.send_json(live_frame(entry))
+        store = get_store()
+        latest = await store.aget_many([k for k in new if not ri.topic(k).recent])
+        for key in new:
+            entries = await store.aget_recent(key) if ri.topic(key).recent else [latest.get(key)]
+            for entry in entries:
+                if entry:
+                    await self.send_json(live_frame(entry))
 
     async def _reconnect(self) -> None:
         if not self.can_command:
