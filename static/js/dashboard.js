@@ -141,3 +141,4 @@ document.getElementById("reconnect-btn")?.addEventListener("click", () => {
 });
 window.cyborgLive = live;
 tickAges();
+import("./commands.js").then(({ initCommands }) => initCommands(document, { live }));
