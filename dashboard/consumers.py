@@ -66,9 +66,10 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
                 except RobotError as exc:
                     await self.send_json({"kind": "error", "message": exc.message})
         store = get_store()
-        latest = await store.aget_many([k for k in new if not ri.topic(k).recent])
+        recent = {k for k in new if k not in SERVER_KEYS and ri.topic(k).recent}
+        latest = await store.aget_many([k for k in new if k not in recent])
         for key in new:
-            entries = await store.aget_recent(key) if ri.topic(key).recent else [latest.get(key)]
+            entries = await store.aget_recent(key) if key in recent else [latest.get(key)]
             for entry in entries:
                 if entry:
                     await self.send_json(live_frame(entry))
