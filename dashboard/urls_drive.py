@@ -1,2 +1,10 @@
-# Page routes (see the issue that owns this page).
-urlpatterns: list = []
+from django.urls import path
+
+from dashboard.views.drive import drive
+from dashboard.views.video import video_snapshot, video_stream
+
+urlpatterns = [
+    path("drive/", drive, name="drive"),
+    path("video/stream", video_stream, name="video-stream"),
+    path("video/snapshot", video_snapshot, name="video-snapshot"),
+]

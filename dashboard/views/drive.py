@@ -1,0 +1,24 @@
+"""The manual control page: camera, keyboard and joystick driving, speed limits, e-stop."""
+
+from __future__ import annotations
+
+from django.conf import settings
+from django.http import HttpRequest, HttpResponse
+from django.shortcuts import render
+from django.urls import reverse
+
+
+def drive_config() -> dict[str, object]:
+    return {
+        "max_linear": settings.TELEOP_MAX_LINEAR,
+        "max_angular": settings.TELEOP_MAX_ANGULAR,
+        "rate_hz": settings.TELEOP_RATE_HZ,
+        "deadman_s": settings.TELEOP_DEADMAN_S,
+        "stream_url": reverse("dashboard:video-stream"),
+        "snapshot_url": reverse("dashboard:video-snapshot"),
+        "keys": ["odom", "robot_pose", "motors_state"],
+    }
+
+
+def drive(request: HttpRequest) -> HttpResponse:
+    return render(request, "dashboard/drive.html", {"drive_config": drive_config()})

@@ -1,0 +1,215 @@
+// The manual control page: keyboard and joystick → /ws/teleop/, camera via the server's
+// proxy, commanded and measured velocity. The server does the rate, the clamping and the
+// deadman; this page only says what the operator's hands are doing, ~20 times a second.
+import { connectLive, notify } from "./live.js";
+import { create as createStick } from "../vendor/nipplejs/index.mjs";
+
+const config = JSON.parse(document.getElementById("drive-config").textContent);
+const card = document.getElementById("drive");
+const canDrive = card.dataset.canDrive === "true";
+const canTakeover = card.dataset.canTakeover === "true";
+const SEND_INTERVAL_MS = 50;
+const $ = (id) => document.getElementById(id);
+const fmt = (v, digits = 2) => (Number.isFinite(v) ? v.toFixed(digits) : "—");
+
+// --- live readouts -----------------------------------------------------------------------
+function yawOf(q) { return Math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z)); }
+
+function onUpdate(frame) {
+  const m = frame.msg;
+  if (frame.key === "odom") {
+    const v = m.twist.twist.linear.x, w = m.twist.twist.angular.z;
+    const el = $("odom-vel");
+    el.dataset.linear = v; el.dataset.angular = w;
+    el.textContent = `${fmt(v)} m/s · ${fmt(w)} rad/s`;
+  } else if (frame.key === "robot_pose") {
+    const el = $("pose");
+    const yaw = yawOf(m.orientation);
+    el.dataset.x = m.position.x; el.dataset.y = m.position.y; el.dataset.yaw = yaw;
+    el.textContent = `x ${fmt(m.position.x)} · y ${fmt(m.position.y)} · ${fmt(yaw * 180 / Math.PI, 0)}°`;
+  } else if (frame.key === "motors_state") {
+    $("motors").textContent = m.data ? "enabled" : "disabled";
+  }
+  document.dispatchEvent(new CustomEvent("robot:update", { detail: frame }));
+}
+const live = connectLive({ keys: config.keys, onUpdate });
+window.cyborgLive = live;
+// Mode buttons, speech box and motor button belong to the commands module (loaded if present).
+import("./commands.js").then((m) => m.initCommands(document)).catch((e) => console.warn("commands", e));
+
+// --- camera --------------------------------------------------------------------------------
+const img = $("camera-img");
+const placeholder = $("camera-placeholder");
+let retryTimer = null;
+function startCamera() {
+  clearInterval(retryTimer);
+  img.src = `${config.stream_url}?t=${Date.now()}`;
+}
+img.addEventListener("load", () => { placeholder.hidden = true; img.hidden = false; });
+img.addEventListener("error", () => {
+  placeholder.hidden = false;
+  img.hidden = true;
+  let left = 3;
+  $("camera-retry").textContent = `Retrying in ${left} s…`;
+  clearInterval(retryTimer);
+  retryTimer = setInterval(() => {
+    left -= 1;
+    if (left > 0) $("camera-retry").textContent = `Retrying in ${left} s…`;
+    else startCamera();
+  }, 1000);
+});
+startCamera();
+
+// --- teleop socket ----------------------------------------------------------------------
+const lock = { holder: null, you: false };
+let ws = null;
+let wsDelay = 500;
+let lastError = { message: "", at: 0 };
+
+function send(obj) {
+  if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(obj));
+}
+
+function showError(message) {
+  const now = Date.now();
+  if (message === lastError.message && now - lastError.at < 3000) return;
+  lastError = { message, at: now };
+  notify(message, "error");
+}
+
+function renderLock() {
+  const el = $("lock-state");
+  el.dataset.holder = lock.holder || "";
+  el.dataset.you = String(lock.you);
+  el.textContent = lock.you ? "You are driving" : lock.holder ? `${lock.holder} is driving` : "Nobody is driving";
+  el.classList.toggle("lock-you", lock.you);
+  el.classList.toggle("lock-other", !lock.you && !!lock.holder);
+  card.classList.toggle("locked-out", !lock.you && !!lock.holder);
+  const show = (id, on) => { const b = $(id); if (b) b.hidden = !on; };
+  show("lock-acquire", canDrive && !lock.you && !lock.holder);
+  show("lock-release", lock.you);
+  show("lock-takeover", canTakeover && !lock.you && !!lock.holder);
+}
+
+function setCommanded(linear, angular) {
+  const el = $("cmd-vel");
+  el.dataset.linear = linear; el.dataset.angular = angular;
+  el.textContent = `${fmt(linear)} m/s · ${fmt(angular)} rad/s`;
+}
+
+function openSocket() {
+  const proto = location.protocol === "https:" ? "wss" : "ws";
+  ws = new WebSocket(`${proto}://${location.host}/ws/teleop/`);
+  ws.onopen = () => { wsDelay = 500; card.classList.remove("offline"); };
+  ws.onmessage = (ev) => {
+    const frame = JSON.parse(ev.data);
+    if (frame.type === "lock") { Object.assign(lock, { holder: frame.holder, you: frame.you }); renderLock(); }
+    else if (frame.type === "commanded") setCommanded(frame.linear, frame.angular);
+    else if (frame.type === "error") showError(frame.message);
+  };
+  ws.onclose = (ev) => {
+    card.classList.add("offline");
+    Object.assign(lock, { holder: null, you: false });
+    renderLock();
+    $("lock-state").textContent = "Drive connection lost — reconnecting…";
+    if (ev.code === 4401) { location.href = "/accounts/login/?next=" + encodeURIComponent(location.pathname); return; }
+    setTimeout(openSocket, wsDelay);
+    wsDelay = Math.min(wsDelay * 2, 8000);
+  };
+}
+openSocket();
+
+// --- input -------------------------------------------------------------------------------
+const keys = new Set();
+const stick = { active: false, x: 0, y: 0 };
+let sending = null; // interval while input is non-zero
+let lastSent = { linear: 0, angular: 0 };
+
+const KEYMAP = {
+  w: "fwd", arrowup: "fwd", s: "back", arrowdown: "back", a: "left", arrowleft: "left", d: "right", arrowright: "right",
+};
+
+function currentInput() {
+  if (stick.active) return { linear: Math.max(-1, Math.min(1, stick.y)), angular: Math.max(-1, Math.min(1, -stick.x)) };
+  const has = (k) => [...keys].some((key) => KEYMAP[key] === k);
+  return { linear: (has("fwd") ? 1 : 0) - (has("back") ? 1 : 0), angular: (has("left") ? 1 : 0) - (has("right") ? 1 : 0) };
+}
+
+function inputFrame(input) {
+  return {
+    type: "input", linear: input.linear, angular: input.angular,
+    max_linear: Number($("max-linear")?.value ?? config.max_linear),
+    max_angular: Number($("max-angular")?.value ?? config.max_angular),
+  };
+}
+
+function inputChanged() {
+  if (!canDrive) return;
+  const input = currentInput();
+  const moving = input.linear !== 0 || input.angular !== 0;
+  if (moving) {
+    if (lock.holder && !lock.you) { showError(`${lock.holder} is driving.`); return; }
+    if (input.linear !== lastSent.linear || input.angular !== lastSent.angular || !sending) send(inputFrame(input));
+    lastSent = input;
+    if (!sending) sending = setInterval(() => send(inputFrame(currentInput())), SEND_INTERVAL_MS);
+  } else {
+    stopInput("release");
+  }
+}
+
+function stopInput(type) {
+  clearInterval(sending);
+  sending = null;
+  lastSent = { linear: 0, angular: 0 };
+  send({ type });
+}
+
+const typing = (el) => el && (el.isContentEditable || ["INPUT", "TEXTAREA", "SELECT"].includes(el.tagName)) && el.type !== "range";
+document.addEventListener("keydown", (ev) => {
+  const key = ev.key.toLowerCase();
+  if (!(key in KEYMAP) || typing(ev.target) || ev.ctrlKey || ev.metaKey || ev.altKey) return;
+  ev.preventDefault();
+  if (keys.has(key)) return; // auto-repeat
+  keys.add(key);
+  inputChanged();
+});
+document.addEventListener("keyup", (ev) => {
+  const key = ev.key.toLowerCase();
+  if (!keys.delete(key)) return;
+  ev.preventDefault();
+  inputChanged();
+});
+// Key-ups never arrive once the window loses focus or the page is hidden: stop now.
+window.addEventListener("blur", () => { if (keys.size || stick.active) { keys.clear(); stopInput("release"); } });
+document.addEventListener("visibilitychange", () => {
+  if (document.visibilityState === "hidden") { keys.clear(); stick.active = false; stopInput("hidden"); }
+});
+window.addEventListener("pagehide", () => stopInput("hidden"));
+
+const zone = $("stick");
+if (zone) {
+  const manager = createStick({ zone, mode: "static", position: { left: "50%", top: "50%" }, size: 140, color: "#2d6cdf" });
+  manager.on("move", (evt) => {
+    const v = evt.data?.vector;
+    if (!v) return;
+    Object.assign(stick, { active: true, x: v.x, y: v.y });
+    inputChanged();
+  });
+  manager.on("end", () => { Object.assign(stick, { active: false, x: 0, y: 0 }); inputChanged(); });
+}
+
+for (const id of ["max-linear", "max-angular"]) {
+  const input = $(id);
+  if (!input) continue;
+  const out = $(`${id}-out`);
+  const show = () => { out.textContent = Number(input.value).toFixed(2); };
+  input.addEventListener("input", () => { show(); if (sending) send(inputFrame(currentInput())); });
+  show();
+}
+
+$("lock-acquire")?.addEventListener("click", () => send({ type: "acquire" }));
+$("lock-release")?.addEventListener("click", () => { stopInput("release"); send({ type: "unlock" }); });
+$("lock-takeover")?.addEventListener("click", () => {
+  if (confirm(`Take the drive lock from ${lock.holder}? The robot stops first.`)) send({ type: "takeover" });
+});
+renderLock();

@@ -1,0 +1,95 @@
+"""The camera through the server: frames for logged-in users, nobody else, and a clear
+503 placeholder while the video server is down."""
+
+import asyncio
+
+import pytest
+from asgiref.testing import ApplicationCommunicator
+from django.test import Client
+
+from tests.helpers import async_wait_until
+
+pytestmark = pytest.mark.django_db(transaction=True)
+BOUNDARY = b"--boundarydonotcross"
+
+
+@pytest.fixture
+def video(sim, settings):
+    settings.VIDEO_URL = sim.video_url
+    return sim
+
+
+def session_cookie(user) -> bytes:
+    client = Client()
+    client.force_login(user)
+    return f"sessionid={client.cookies['sessionid'].value}".encode()
+
+
+def http_scope(path: str, cookie: bytes | None = None, query: bytes = b"") -> dict:
+    headers = [(b"host", b"127.0.0.1")] + ([(b"cookie", cookie)] if cookie else [])
+    return {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": "GET", "scheme": "http",
+            "path": path, "raw_path": path.encode(), "query_string": query, "headers": headers,
+            "client": ("127.0.0.1", 50000), "server": ("127.0.0.1", 8000)}
+
+
+async def open_stream(path: str, cookie: bytes | None = None) -> tuple[ApplicationCommunicator, dict]:
+    from cyborg_site.asgi import application
+
+    app = ApplicationCommunicator(application, http_scope(path, cookie))
+    await app.send_input({"type": "http.request", "body": b"", "more_body": False})
+    start = await app.receive_output(timeout=10)
+    assert start["type"] == "http.response.start"
+    return app, start
+
+
+async def test_it_streams_camera_frames_to_a_logged_in_user_and_lets_go_of_the_upstream(video, viewer):
+    cookie = await asyncio.to_thread(session_cookie, viewer)
+    app, start = await open_stream("/video/stream", cookie)
+    assert start["status"] == 200
+    headers = dict(start["headers"])
+    assert headers[b"Content-Type"].startswith(b"multipart/x-mixed-replace")
+    body = b""
+    while body.count(b"\xff\xd8") < 2:  # two JPEG frames (start-of-image markers)
+        message = await app.receive_output(timeout=5)
+        assert message["type"] == "http.response.body" and message.get("more_body")
+        body += message["body"]
+    assert body.count(BOUNDARY) >= 2
+    assert str(video.video_port).encode() not in body  # the upstream address never reaches the browser
+
+    await app.send_input({"type": "http.disconnect"})
+    await app.wait(timeout=5)
+    await async_wait_until(lambda: not video.call(lambda: video.robot.video.writers), timeout=5,
+                           what="the upstream stream closed")
+
+
+async def test_it_sends_a_snapshot_jpeg(video, operator):
+    cookie = await asyncio.to_thread(session_cookie, operator)
+    app, start = await open_stream("/video/snapshot", cookie)
+    assert start["status"] == 200 and dict(start["headers"])[b"Content-Type"] == b"image/jpeg"
+    body = b""
+    while True:
+        message = await app.receive_output(timeout=5)
+        body += message.get("body", b"")
+        if not message.get("more_body"):
+            break
+    assert body.startswith(b"\xff\xd8") and body.endswith(b"\xff\xd9")
+
+
+@pytest.mark.parametrize("path", ["/video/stream", "/video/snapshot"])
+async def test_it_refuses_anonymous_users(video, path):
+    _app, start = await open_stream(path)
+    assert start["status"] == 302
+    assert dict(start["headers"])[b"Location"].startswith(b"/accounts/login/")
+    assert not video.call(lambda: video.robot.video.writers)
+
+
+@pytest.mark.parametrize("path", ["/video/stream", "/video/snapshot"])
+def test_it_answers_503_with_a_placeholder_while_the_video_server_is_down(client, viewer, settings, path):
+    from tests.stack import free_port
+
+    settings.VIDEO_URL = f"http://127.0.0.1:{free_port()}"
+    client.force_login(viewer)
+    response = client.get(path)
+    assert response.status_code == 503
+    assert response["Content-Type"] == "image/svg+xml" and response["Retry-After"]
+    assert b"Camera unavailable" in response.content
