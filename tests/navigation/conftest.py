@@ -48,4 +48,4 @@ def wait_goal_state(client, *states: str, timeout: float = 20.0) -> str:
                       what=f"goal status in {states}")
 
 
-__all__ = ["GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "stored", "goal_state", "wait_goal_state"]
+__all__ = ["GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "goal_state", "stored", "wait_goal_state"]
