@@ -1,0 +1,65 @@
+"""The map page in a real browser: press-drag-release sends a goal and the robot marker moves to it."""
+
+import math
+import re
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.browser.conftest import login
+
+pytestmark = pytest.mark.browser
+
+
+def robot_xy(page) -> tuple[float, float]:
+    view = page.locator("#map-view")
+    return float(view.get_attribute("data-robot-x")), float(view.get_attribute("data-robot-y"))
+
+
+def open_map(page, stack, user: str) -> None:
+    login(page, stack, user, next_path="/map/")
+    expect(page.locator("#map-view")).to_have_attribute("data-ready", "1")
+    expect(page.locator("#map-view")).to_have_attribute("data-robot-x", re.compile(r"^-?\d"))
+
+
+def test_it_sends_a_goal_by_dragging_and_the_robot_marker_moves_there(page, stack):
+    open_map(page, stack, "otto")
+    goal = (3.5, -1.0)
+    start = robot_xy(page)
+    page.click('[data-mode="goal"]')
+    sx, sy = page.evaluate("([x, y]) => window.cyborgMap.toClient(x, y)", list(goal))
+    hx, hy = page.evaluate("([x, y]) => window.cyborgMap.toClient(x, y)", [goal[0], goal[1] + 1.0])
+    page.mouse.move(sx, sy)
+    page.mouse.down()
+    page.mouse.move(hx, hy, steps=5)
+    page.mouse.up()
+    expect(page.locator("#goal-status")).to_have_text("active", timeout=10_000)
+    sent = stack_goal(page)
+    assert math.hypot(sent["x"] - goal[0], sent["y"] - goal[1]) < 0.1
+    assert abs(sent["yaw"] - math.pi / 2) < 0.1  # dragged straight up the map
+    first = math.dist(start, goal)
+    page.wait_for_function(
+        """([gx, gy, d]) => {
+            const v = document.getElementById('map-view').dataset;
+            return Math.hypot(v.robotX - gx, v.robotY - gy) < d;
+        }""", arg=[goal[0], goal[1], first - 1.0], timeout=20_000)
+    expect(page.locator("#goal-status")).to_have_text("succeeded", timeout=20_000)
+    assert math.dist(robot_xy(page), goal) < 0.3
+
+
+def stack_goal(page) -> dict:
+    return page.evaluate("() => window.cyborgMap.state.goal")
+
+
+def test_it_zooms_with_the_wheel_and_shows_map_coordinates(page, stack):
+    open_map(page, stack, "vera")
+    expect(page.locator('[data-mode="goal"]')).to_be_disabled()
+    before = page.evaluate("() => window.cyborgMap.view.scale")
+    cx, cy = page.evaluate("() => window.cyborgMap.toClient(0, 0)")
+    page.mouse.move(cx, cy)
+    page.mouse.wheel(0, -400)
+    page.wait_for_function("(s) => window.cyborgMap.view.scale > s * 1.5", arg=before)
+    # Zooming around the cursor keeps the point under it.
+    after = page.evaluate("() => window.cyborgMap.toClient(0, 0)")
+    assert math.dist(after, (cx, cy)) < 2
+    expect(page.locator("#map-cursor")).to_have_text("x 0.00 m · y 0.00 m")
