@@ -78,6 +78,10 @@ class RobotLink:
         self.ros.factory.initialDelay = 0.5
         self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready))
         self.ros.on("close", lambda *_: self._threadsafe(self._on_close))
+        if getattr(self.ros.factory, "_proto", None) is not None:
+            # With the reactor already running (a second link in a process, tests) the
+            # connection can open before the "ready" handler above was registered.
+            self._threadsafe(self._on_ready)
         if not reactor.running:
             self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)
         for t in self.topics:
