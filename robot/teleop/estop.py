@@ -11,8 +11,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
-from robot.bus import RobotError, acall_service, arequest
+from robot.bus import RobotError, acall_service
 from robot.commanding import arun_command
+from robot.commands.modes import perform_mode
+from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
 from robot.teleop.lock import get_lock
 from robot.teleop.session import publish_cmd_vel
@@ -21,9 +23,6 @@ from robot.teleop.twist import STOP
 log = logging.getLogger(__name__)
 
 STEP_TIMEOUT_S = 3.0
-# actionlib: a GoalID with an empty id and a zero stamp cancels every goal of that server.
-CANCEL_ALL = {"stamp": {"secs": 0, "nsecs": 0}, "id": ""}
-GOAL_ID_TYPE = "actionlib_msgs/GoalID"
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,7 @@ class EstopIncomplete(RobotError):
         self.report = report
 
 
-async def _zero_velocity() -> str:
+async def _zero_velocity(by: str) -> str:
     # Free the lock first: every teleop loop's next refresh fails, and the announcement stops
     # the loops at once, so no driver's Twist follows our zero.
     try:
@@ -70,27 +69,25 @@ async def _zero_velocity() -> str:
     return f"zero Twist sent; {previous.username} stopped driving" if previous else "zero Twist sent"
 
 
-async def _cancel_navigation() -> str:
+async def _cancel_navigation(by: str) -> str:
+    # An empty goal id cancels every goal of the server: ours, and any a robot-side node sent.
     for key in ("move_base", "navigation"):
-        name = ri.action(key).name + "/cancel"
-        await arequest("publish", topic=name, msg_type=GOAL_ID_TYPE, msg=dict(CANCEL_ALL), timeout=STEP_TIMEOUT_S)
+        await apublish_action(key, "cancel", cancel_message())
     return "all navigation goals cancelled"
 
 
-async def _disable_motors() -> str:
+async def _disable_motors(by: str) -> str:
     await acall_service("disable_motors", timeout=STEP_TIMEOUT_S)
     return "motors disabled"
 
 
-async def _mode_stop() -> str:
-    try:
-        from robot.commands.modes import perform_mode
-    except ImportError:
-        raise RobotError("mode commander not available in this build") from None
-    return await perform_mode(ri.Mode.STOP) or "mode stop"
+async def _mode_stop(by: str) -> str:
+    # The raw mode change: an e-stop is never refused because a mode change is under way.
+    return await perform_mode(ri.Mode.STOP, requested_by=by)
 
 
-STEPS: tuple[tuple[str, Callable[[], Awaitable[str]]], ...] = (
+Step = Callable[[str], Awaitable[str]]
+STEPS: tuple[tuple[str, Step], ...] = (
     ("zero_velocity", _zero_velocity),
     ("cancel_navigation", _cancel_navigation),
     ("disable_motors", _disable_motors),
@@ -98,9 +95,9 @@ STEPS: tuple[tuple[str, Callable[[], Awaitable[str]]], ...] = (
 )
 
 
-async def _attempt(name: str, step: Callable[[], Awaitable[str]]) -> StepResult:
+async def _attempt(name: str, step: Step, by: str) -> StepResult:
     try:
-        return StepResult(name, True, await asyncio.wait_for(step(), STEP_TIMEOUT_S + 2))
+        return StepResult(name, True, await asyncio.wait_for(step(by), STEP_TIMEOUT_S + 2))
     except RobotError as exc:
         return StepResult(name, False, exc.message)
     except TimeoutError:
@@ -110,11 +107,11 @@ async def _attempt(name: str, step: Callable[[], Awaitable[str]]) -> StepResult:
         return StepResult(name, False, f"{type(exc).__name__}: {exc}")
 
 
-async def estop_steps() -> EstopReport:
+async def estop_steps(*, by: str = "") -> EstopReport:
     """All four steps: the zero Twist first (fastest), then the rest side by side."""
     (first_name, first), rest = STEPS[0], STEPS[1:]
-    head = await _attempt(first_name, first)
-    tail = await asyncio.gather(*(_attempt(name, step) for name, step in rest))
+    head = await _attempt(first_name, first, by)
+    tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in rest))
     return EstopReport((head, *tail))
 
 
@@ -124,7 +121,7 @@ async def estop_run(*, user: Any, source: str) -> EstopReport:
 
     async def run() -> str:
         nonlocal report
-        report = await estop_steps()
+        report = await estop_steps(by=user.get_username() if getattr(user, "is_authenticated", False) else "")
         if not report.ok:
             raise EstopIncomplete(report)
         return report.summary()
