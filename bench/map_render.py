@@ -1,0 +1,137 @@
+"""How fast a map gets from the robot to a browser's screen.
+
+1. In process, for the default (400x300) and the large (4000x4000) simulator maps: JSON
+   decode of the rosbridge frame (what roslibpy does on the link's loop thread), conversion
+   to numpy + versioning, rendering, and the sum (message to image).
+2. The real product (simulator + Daphne, ``tests/stack.py``) with a real headless Chromium:
+   time from the link connecting to the map image rendered (server log), the longest
+   /healthz answer while the large map arrives (the event loop stalls while roslibpy
+   decodes the frame), and first paint of the map page (``page.goto`` until the page set
+   ``data-ready``: image loaded and overlay drawn), cold and with the image cached.
+
+Run: .venv/bin/python bench/map_render.py
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import threading
+import time
+import urllib.request
+from datetime import datetime
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from robot.navigation.mapimage import render_map  # noqa: E402
+from robot.sim import world  # noqa: E402
+from tests.browser.conftest import CHROMIUM, CHROMIUM_ARGS, login  # noqa: E402
+from tests.stack import Stack  # noqa: E402
+
+
+def grid_frame(w: world.WorldMap) -> bytes:
+    msg = {"header": {"frame_id": "map"}, "info": {
+        "resolution": w.resolution, "width": w.width, "height": w.height,
+        "origin": {"position": {"x": w.origin_x, "y": w.origin_y, "z": 0.0},
+                   "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}, "data": w.grid.ravel().tolist()}
+    return json.dumps({"op": "publish", "topic": "/map", "msg": msg}).encode()
+
+
+def in_process(name: str, w: world.WorldMap) -> None:
+    frame = grid_frame(w)
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        msg = json.loads(frame.decode("utf8"))["msg"]
+        t1 = time.perf_counter()
+        rendered = render_map(msg, Path(tmp))
+        t2 = time.perf_counter()
+        png_kb = rendered.png.stat().st_size / 1000
+    print(f"{name}_frame_mb: {len(frame) / 1e6:.1f}")
+    print(f"{name}_decode_ms: {(t1 - t0) * 1000:.0f}")
+    print(f"{name}_convert_ms: {rendered.convert_ms:.0f}")
+    print(f"{name}_render_ms: {rendered.render_ms:.0f}")
+    print(f"{name}_message_to_image_ms: {(t2 - t0) * 1000:.0f}")
+    print(f"{name}_png_kb: {png_kb:.0f}")
+
+
+class HealthProbe(threading.Thread):
+    """Ask /healthz back to back and keep the slowest answer (event-loop stalls)."""
+
+    def __init__(self, url: str) -> None:
+        super().__init__(daemon=True)
+        self.url, self.worst, self.running = url, 0.0, True
+
+    def run(self) -> None:
+        while self.running:
+            t0 = time.perf_counter()
+            try:
+                urllib.request.urlopen(f"{self.url}/healthz", timeout=10).read()
+            except OSError:
+                time.sleep(0.02)
+                continue
+            self.worst = max(self.worst, time.perf_counter() - t0)
+            time.sleep(0.01)
+
+
+def first_paint(browser, stack: Stack) -> tuple[float, float]:
+    context = browser.new_context(viewport={"width": 1280, "height": 900})
+    page = context.new_page()
+    try:
+        login(page, stack, "vera")
+        times = []
+        for _ in range(2):  # cold, then with the image in the browser's cache
+            t0 = time.perf_counter()
+            page.goto(f"{stack.url}/map/")
+            page.wait_for_selector('#map-view[data-ready="1"]', timeout=30_000)
+            times.append((time.perf_counter() - t0) * 1000)
+        return times[0], times[1]
+    finally:
+        context.close()
+
+
+def log_time(stack: Stack, needle: str, timeout: float = 40.0) -> float:
+    """Epoch seconds of the first web-server log line containing ``needle``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for line in stack.log("web").splitlines():
+            if needle in line:
+                stamp = datetime.strptime(line[:23], "%Y-%m-%d %H:%M:%S,%f")
+                return stamp.timestamp()
+        time.sleep(0.05)
+    raise SystemExit(f"no {needle!r} in the server log:\n" + stack.log("web")[-2000:])
+
+
+def end_to_end(browser, name: str, sim_args: tuple[str, ...]) -> None:
+    with Stack(sim_args=sim_args) as stack:
+        probe = HealthProbe(stack.url)
+        probe.start()
+        stack.wait_robot_online(timeout=40)
+        online = log_time(stack, "robot link connected")
+        ready = log_time(stack, "robot.navigation.handlers: map ")
+        probe.running = False
+        cold, cached = first_paint(browser, stack)
+    print(f"{name}_online_to_server_image_ms: {(ready - online) * 1000:.0f}")
+    print(f"{name}_healthz_worst_ms: {probe.worst * 1000:.0f}")
+    print(f"{name}_first_paint_ms: {cold:.0f}")
+    print(f"{name}_first_paint_cached_ms: {cached:.0f}")
+
+
+def main() -> None:
+    from playwright.sync_api import sync_playwright
+
+    in_process("default", world.glassgarden())
+    in_process("large", world.large())
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            end_to_end(browser, "default", ())
+            end_to_end(browser, "large", ("--map", "large"))
+        finally:
+            browser.close()
+
+
+if __name__ == "__main__":
+    main()
