@@ -11,8 +11,10 @@ from django.http import StreamingHttpResponse
 from drf_spectacular.utils import extend_schema
 from rest_framework import permissions
 from rest_framework.decorators import api_view, permission_classes
+from rest_framework.negotiation import BaseContentNegotiation
 from rest_framework.request import Request
 from rest_framework.response import Response
+from rest_framework.views import APIView
 
 from cyborg_site.roles import is_admin
 from history import serializers as s
@@ -87,19 +89,31 @@ def samples_view(request: Request) -> Response:
     return Response(vars(result))
 
 
-@extend_schema(parameters=[s.ExportIn], responses={(200, "application/octet-stream"): bytes},
-               summary="Stream a topic's samples as CSV, JSON Lines or MCAP (JSON encoding, opens in Foxglove)")
-@api_view(["GET"])
-def export_view(request: Request) -> StreamingHttpResponse:
-    q = s.ExportIn(data=request.query_params)
-    q.is_valid(raise_exception=True)
-    v = q.validated_data
-    content_type, ext = FORMATS[v["format"]]
-    chunks = EXPORTERS[v["format"]](v["topic"], v["start"], v["end"])
-    response = StreamingHttpResponse(_async_chunks(chunks), content_type=content_type)
-    name = v["topic"].strip("/").replace("/", "_") or "topic"
-    response["Content-Disposition"] = f'attachment; filename="{name}-{v["start"]:%Y%m%dT%H%M%S}.{ext}"'
-    return response
+class _IgnoreFormatParameter(BaseContentNegotiation):
+    """``format`` here names the export format, not a DRF renderer (which would answer 404)."""
+
+    def select_renderer(self, request, renderers, format_suffix=None):
+        return renderers[0], renderers[0].media_type
+
+    def select_parser(self, request, parsers):
+        return parsers[0] if parsers else None
+
+
+class ExportView(APIView):
+    content_negotiation_class = _IgnoreFormatParameter
+
+    @extend_schema(parameters=[s.ExportIn], responses={(200, "application/octet-stream"): bytes},
+                   summary="Stream a topic's samples as CSV, JSON Lines or MCAP (JSON encoding, opens in Foxglove)")
+    def get(self, request: Request) -> StreamingHttpResponse:
+        q = s.ExportIn(data=request.query_params)
+        q.is_valid(raise_exception=True)
+        v = q.validated_data
+        content_type, ext = FORMATS[v["format"]]
+        chunks = EXPORTERS[v["format"]](v["topic"], v["start"], v["end"])
+        response = StreamingHttpResponse(_async_chunks(chunks), content_type=content_type)
+        name = v["topic"].strip("/").replace("/", "_") or "topic"
+        response["Content-Disposition"] = f'attachment; filename="{name}-{v["start"]:%Y%m%dT%H%M%S}.{ext}"'
+        return response
 
 
 async def _async_chunks(chunks):

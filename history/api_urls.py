@@ -7,6 +7,6 @@ urlpatterns = [
     path("topics/discover/", api.discover_view, name="history-discover"),
     path("recorded/", api.recorded_view, name="history-recorded"),
     path("samples/", api.samples_view, name="history-samples"),
-    path("export/", api.export_view, name="history-export"),
+    path("export/", api.ExportView.as_view(), name="history-export"),
     path("timeline/", api.timeline_view, name="history-timeline"),
 ]

@@ -16,13 +16,12 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from asgiref.sync import sync_to_async
 from django.conf import settings
 
 from history.models import Mode
 from history.policies import Policy, load_policies
 from history.sampling import latest_key
-from history.storage import Pending, Row, encode, write_rows
+from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +49,9 @@ class Recorder:
         self._buffer: list[Pending] = []
         self._full: asyncio.Event | None = None
         self._subscribed_by_us: set[str] = set()
+        self._reload_log = FailureLog("loading recording policies")
+        self._write_log = FailureLog("writing recorded messages")
+        self._retry: list[Row] = []
         self.received = self.stored = self.dropped = self.oversize = 0
 
     # --- on the event-loop thread: never blocks --------------------------------------
@@ -89,15 +91,28 @@ class Recorder:
     def flush_sync(self, pending: Sequence[Pending]) -> int:
         rows, oversize = encode(pending, self.limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
         self.oversize += oversize
+        rows, self._retry = self._retry + rows, []
         for start in range(0, len(rows), self.batch_rows):
-            self.stored += self.writer(rows[start:start + self.batch_rows])
+            try:
+                self.stored += self.writer(rows[start:start + self.batch_rows])
+            except Exception:
+                # Keep what was not written for the next flush, within the same memory bound.
+                self._retry = rows[start:start + self.buffer_rows]
+                self.dropped += len(rows) - start - len(self._retry)
+                raise
         return len(rows)
 
     async def flush(self) -> int:
         pending = self.take()
-        if not pending:
+        if not pending and not self._retry:
             return 0
-        return await asyncio.to_thread(_in_fresh_connection, self.flush_sync, pending)
+        try:
+            written = await in_thread(self.flush_sync, pending)
+        except Exception:
+            self._write_log.failed()
+            return 0
+        self._write_log.ok()
+        return written
 
     async def run(self, link: Any) -> None:
         """Background service: reload policies, keep subscriptions, flush batches, publish latest."""
@@ -124,10 +139,11 @@ class Recorder:
 
     async def reload(self, link: Any) -> None:
         try:
-            policies = await sync_to_async(load_policies, thread_sensitive=False)()
+            policies = await in_thread(load_policies)
         except Exception:
-            log.exception("history: could not load recording policies; keeping the previous ones")
+            self._reload_log.failed()  # the previous policies stay in force
             return
+        self._reload_log.ok()
         self.apply(policies)
         wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
         for name, msg_type in wanted.items():
@@ -144,16 +160,6 @@ class Recorder:
             await store.aput(entry["key"], entry)
 
 
-def _in_fresh_connection(fn: Callable[..., int], *args: Any) -> int:
-    from django.db import close_old_connections
-
-    close_old_connections()
-    try:
-        return fn(*args)
-    finally:
-        close_old_connections()
-
-
 # The recorder running in this process, if any (tests and the status view read its counters).
 current: Recorder | None = None
 
@@ -163,8 +169,8 @@ async def run_recorder(link: Any) -> None:
     global current
     writer = write_rows
     if settings.HISTORY_BATCH_WRITER == "celery":
-        from history.tasks import celery_writer
+        from history.tasks import celery_writer_for
 
-        writer = celery_writer
+        writer = celery_writer_for()
     current = Recorder(writer=writer)
     await current.run(link)

@@ -16,7 +16,7 @@ from django.db import transaction
 
 from history.models import Mode, TopicPolicy
 from history.policies import load_policies
-from history.storage import Pending, encode, write_rows
+from history.storage import FailureLog, Pending, encode, in_thread, write_rows
 
 log = logging.getLogger(__name__)
 
@@ -70,20 +70,18 @@ async def run_schedule(link: Any) -> None:
     """Embedded default: the beat schedule (sampling, retention) inside the server process."""
     import asyncio
 
-    from asgiref.sync import sync_to_async
-
     from history.retention import prune_expired
 
-    sample = sync_to_async(sample_periodic, thread_sensitive=False)
-    prune = sync_to_async(prune_expired, thread_sensitive=False)
     next_prune = time.monotonic() + settings.HISTORY_SAMPLE_TICK_S
+    failures = FailureLog("periodic sampling and pruning")
     while True:
         started = time.monotonic()
         try:
-            await sample(store=link.store)
+            await in_thread(sample_periodic, store=link.store)
             if started >= next_prune:
                 next_prune = started + settings.HISTORY_PRUNE_EVERY_S
-                await prune()
+                await in_thread(prune_expired)
+            failures.ok()
         except Exception:
-            log.exception("history: periodic sampling or pruning failed")
+            failures.failed()
         await asyncio.sleep(max(0.05, settings.HISTORY_SAMPLE_TICK_S - (time.monotonic() - started)))

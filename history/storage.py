@@ -6,21 +6,23 @@ Plain ``bulk_create`` tops out near 10,000 rows/s; the recorder must sustain mor
 
 from __future__ import annotations
 
+import asyncio
 import json
 import logging
 import math
 import time
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, TypeVar
 
-from django.db import connection, transaction
+from django.db import close_old_connections, connection, transaction
 from django.db.models import BigIntegerField, ExpressionWrapper, F
 
 from history.models import Sample, SeriesBucket
 
 log = logging.getLogger(__name__)
+T = TypeVar("T")
 
 # (topic, msg_type, receive time in epoch seconds, message as JSON text)
 Row = tuple[str, str, float, str]
@@ -32,6 +34,37 @@ SETTLE_S = 10.0
 
 _TABLE = Sample._meta.db_table
 _COLUMNS = "topic, msg_type, received_at, data"
+
+
+class FailureLog:
+    """Log a repeating background failure once, and its recovery, instead of every retry."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self.failing = False
+
+    def ok(self) -> None:
+        if self.failing:
+            log.warning("history: %s works again", self.what)
+            self.failing = False
+
+    def failed(self) -> None:
+        if not self.failing:
+            log.exception("history: %s failed; retrying quietly until it works", self.what)
+            self.failing = True
+
+
+async def in_thread(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+    """Run blocking database work off the event loop, in a worker thread that tidies its connection."""
+
+    def call() -> T:
+        close_old_connections()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            close_old_connections()
+
+    return await asyncio.to_thread(call)
 
 
 def utc(t: float) -> datetime:

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from celery import shared_task
+from collections.abc import Callable, Sequence
+
+from celery import Celery, shared_task
 
 from history.retention import prune_expired
 from history.sampling import sample_periodic
-from history.storage import write_rows
+from history.storage import Row, write_rows
 
 
 @shared_task(name="history.sample", ignore_result=True)
@@ -25,7 +27,11 @@ def write_batch(rows: list[list]) -> int:
     return write_rows([(str(topic), str(msg_type), float(t), str(text)) for topic, msg_type, t, text in rows])
 
 
-def celery_writer(rows: list) -> int:
-    """A recorder writer that queues the batch for the worker instead of writing it here."""
-    write_batch.delay([list(r) for r in rows])
-    return len(rows)
+def celery_writer_for(app: Celery | None = None) -> Callable[[Sequence[Row]], int]:
+    """A recorder writer that queues each batch for a worker instead of writing it here."""
+
+    def write(rows: Sequence[Row]) -> int:
+        (app or write_batch.app).send_task(write_batch.name, args=[[list(r) for r in rows]])
+        return len(rows)
+
+    return write
