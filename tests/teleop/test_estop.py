@@ -10,6 +10,9 @@ from robot.models import AuditEntry
 from tests.commands.support import wait_ready, wait_state
 from tests.teleop.support import drive_socket, is_moving, is_zero, key, lock_frame, twists, wait_twist
 
+# The API runs the async service from a sync view: database_sync_to_async closes the
+# connection a plain test transaction lives on (PostgreSQL), so these tests commit.
+pytestmark = pytest.mark.django_db(transaction=True)
 STEPS = ["zero_velocity", "cancel_navigation", "disable_motors", "mode_stop"]
 STAGE_GOAL = {"header": {"frame_id": ri.MAP_FRAME},
               "pose": {"position": {"x": 6.5, "y": -1.0, "z": 0.0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}}}
@@ -73,7 +76,6 @@ def test_it_shows_the_button_to_operators_only_on_every_page(client, operator, v
     assert 'id="estop-btn"' not in client.get("/").content.decode()
 
 
-@pytest.mark.django_db(transaction=True)
 async def test_it_ends_the_active_teleop_session_and_frees_the_lock(link, sim, operator):
     from robot.teleop.estop import estop_run
     from robot.teleop.lock import get_lock
