@@ -16,6 +16,8 @@ def _pose(page) -> tuple[float, float]:
 
 
 def test_it_drives_forward_while_w_is_held_and_stops_on_release(page, stack):
+    errors = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
     login(page, stack, "otto", next_path="/drive/")
     expect(page.locator("#lock-state")).to_have_text("Nobody is driving")
     expect(page.locator("#pose")).not_to_have_attribute("data-x", "")
@@ -38,6 +40,7 @@ def test_it_drives_forward_while_w_is_held_and_stops_on_release(page, stack):
     page.wait_for_timeout(600)  # long enough for a runaway robot to show on the 10 Hz pose
     assert math.dist(stopped, _pose(page)) < 0.02
     assert math.dist(start, stopped) > 0.3
+    assert errors == []
 
 
 def test_it_shows_the_camera_through_the_server(page, stack):
