@@ -29,6 +29,7 @@ from tests.stack import PASSWORD, Stack  # noqa: E402
 PRESSES = 40
 DISCONNECTS = 15
 WAIT_S = 3.0
+POLL_S = 0.01
 FORWARD = {"type": "input", "linear": 1.0, "angular": 0.0}
 
 
@@ -61,16 +62,20 @@ class Simulator:
         return self._get(0)["count"]
 
     def first_after(self, before: int, predicate) -> float:
-        """Receive time of the first Twist after index ``before`` that matches."""
+        """Receive time of the first Twist after index ``before`` that matches.
+
+        The simulator stamps each message as it arrives, so polling slower costs no accuracy;
+        polling faster would only load the simulator's loop and delay what we measure.
+        """
         deadline = time.monotonic() + WAIT_S
         while time.monotonic() < deadline:
+            time.sleep(POLL_S)
             data = self._get(0)
             if data["count"] > before:
                 messages = self._get(data["count"] - before)["messages"]
                 hits = [m["t"] for m in messages if predicate(m["msg"])]
                 if hits:
                     return hits[0]
-            time.sleep(0.001)
         raise SystemExit("the simulator never received the expected Twist")
 
 
