@@ -1,0 +1,101 @@
+import json
+import time
+
+import pytest
+from django.test import Client
+
+from history.models import Mode, TopicPolicy
+from history.selectors import numeric_fields, state_timeline
+from history.storage import utc, write_rows
+from robot import interface as ri
+from tests.conftest import PASSWORD
+
+
+def _client(user) -> Client:
+    client = Client()
+    assert client.login(username=user.username, password=PASSWORD)
+    return client
+
+
+def test_it_shows_the_plots_page_with_presets_to_viewers(viewer):
+    TopicPolicy.objects.create(topic=ri.topic("battery_soc").name, msg_type="std_msgs/Float32", mode=Mode.PERIODIC)
+    write_rows([(ri.topic("battery_soc").name, "std_msgs/Float32", time.time(), '{"data": 0.8}')])
+
+    res = _client(viewer).get("/history/")
+
+    assert res.status_code == 200
+    html = res.content.decode()
+    assert "vendor/uplot/uPlot.iife.min.js" in html and "js/history.js" in html
+    assert "Recording policies are set by an admin." in html
+    config = json.loads(html.split('id="history-config" type="application/json">')[1].split("</script>")[0])
+    assert config["presets"]["battery"]["topic"] == ri.topic("battery_soc").name
+    assert config["presets"]["pad"]["fields"] == ["current_pleasure", "current_arousal", "current_dominance"]
+    assert config["topics"] == [{"topic": ri.topic("battery_soc").name, "msg_type": "std_msgs/Float32",
+                                 "fields": ["data"]}]
+
+
+def test_it_links_admins_to_the_policies(admin_user):
+    res = _client(admin_user).get("/history/")
+
+    assert "/admin/history/topicpolicy/" in res.content.decode()
+
+
+def test_it_sends_anonymous_visitors_to_log_in(client, db):
+    res = client.get("/history/")
+
+    assert res.status_code == 302
+    assert "/accounts/login/" in res["Location"]
+
+
+def test_it_finds_numeric_fields_including_small_arrays():
+    msg = {"header": {"seq": 3, "frame_id": "map"}, "pose": {"x": 1.0}, "ok": True, "covariance": [0.0] * 36,
+           "rgb": [1, 2, 3], "name": "x"}
+
+    assert numeric_fields(msg) == ["header.seq", "pose.x", "ok", "rgb.0", "rgb.1", "rgb.2"]
+
+
+def _state_changes(t0: float, changes: list[tuple[float, str, str]]) -> None:
+    topic = ri.topic("state_change")
+    write_rows([(topic.name, topic.type, t0 + at, json.dumps({"event": "e", "from_system_state": a,
+                                                               "to_system_state": b}))
+                for at, a, b in changes])
+
+
+def test_it_computes_time_spent_per_state(db):
+    t0 = time.time() - 3600
+    _state_changes(t0, [(-50, "startup", "suspension"), (10, "suspension", "idle"), (40, "idle", "behaviour"),
+                        (70, "behaviour", "idle")])
+
+    timeline = state_timeline(start=utc(t0), end=utc(t0 + 100))
+
+    assert timeline.totals == pytest.approx({"suspension": 10, "idle": 30 + 30, "behaviour": 30})
+    assert [s["state"] for s in timeline.segments] == ["suspension", "idle", "behaviour", "idle"]
+    assert timeline.segments[0]["start"] == pytest.approx(t0)
+
+
+def test_it_starts_the_timeline_from_the_first_change_when_nothing_came_before(db):
+    t0 = time.time() - 3600
+    _state_changes(t0, [(20, "startup", "suspension")])
+
+    timeline = state_timeline(start=utc(t0), end=utc(t0 + 60))
+
+    assert timeline.totals == pytest.approx({"startup": 20, "suspension": 40})
+
+
+def test_it_stops_the_timeline_at_now(db):
+    now = time.time()
+    _state_changes(now - 30, [(0, "idle", "demo")])
+
+    timeline = state_timeline(start=utc(now - 60), end=utc(now + 3600), now=now)
+
+    assert timeline.totals == pytest.approx({"idle": 30, "demo": 30}, abs=0.01)
+
+
+def test_it_serves_the_timeline(viewer_api):
+    t0 = time.time() - 3600
+    _state_changes(t0, [(10, "suspension", "idle")])
+
+    res = viewer_api.get("/api/history/timeline/", {"start": t0, "end": t0 + 20})
+
+    assert res.status_code == 200
+    assert res.json()["totals"] == pytest.approx({"suspension": 10, "idle": 10})
