@@ -63,3 +63,32 @@ def test_it_zooms_with_the_wheel_and_shows_map_coordinates(page, stack):
     after = page.evaluate("() => window.cyborgMap.toClient(0, 0)")
     assert math.dist(after, (cx, cy)) < 2
     expect(page.locator("#map-cursor")).to_have_text("x 0.00 m · y 0.00 m")
+
+
+PINCH = """([ax, ay, bx, by, spread]) => {
+    const el = document.getElementById('map-overlay');
+    const fire = (type, id, x, y) => el.dispatchEvent(new PointerEvent(type, {
+        pointerId: id, pointerType: 'touch', isPrimary: id === 11, clientX: x, clientY: y, bubbles: true}));
+    fire('pointerdown', 11, ax, ay); fire('pointerdown', 12, bx, by);
+    for (let k = 1; k <= 5; k++) {
+        fire('pointermove', 11, ax - spread * k / 5, ay); fire('pointermove', 12, bx + spread * k / 5, by);
+    }
+    fire('pointerup', 11, ax - spread, ay); fire('pointerup', 12, bx + spread, by);
+}"""
+
+
+def test_it_fits_a_phone_and_zooms_with_a_pinch(browser, stack):
+    context = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
+    page = context.new_page()
+    try:
+        open_map(page, stack, "vera")
+        overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+        assert overflow <= 0, f"the map page is {overflow}px wider than a phone screen"
+        before = page.evaluate("() => window.cyborgMap.view.scale")
+        cx, cy = page.evaluate("() => window.cyborgMap.toClient(0, 0)")
+        page.evaluate(PINCH, [cx - 20, cy, cx + 20, cy, 40])
+        # Fingers 40 px apart spread to 120 px: three times the zoom, centred between them.
+        assert page.evaluate("() => window.cyborgMap.view.scale") == pytest.approx(before * 3, rel=0.01)
+        assert math.dist(page.evaluate("() => window.cyborgMap.toClient(0, 0)"), (cx, cy)) < 2
+    finally:
+        context.close()

@@ -7,6 +7,10 @@ from robot.models import AuditEntry
 from tests.helpers import wait_until
 from tests.navigation.conftest import wait_goal_state
 
+# Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
+# sits in a test transaction: these tests need real transactions.
+pytestmark = pytest.mark.django_db(transaction=True)
+
 GOAL_TOPIC = ri.action_topic("move_base", "goal")[0]
 
 

@@ -8,11 +8,14 @@ from robot.state import get_store
 from tests.helpers import wait_until
 from tests.navigation.conftest import wait_goal_state
 
+# Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
+# sits in a test transaction: these tests need real transactions.
+pytestmark = pytest.mark.django_db(transaction=True)
+
 MOVE_BASE_GOAL = ri.action_topic("move_base", "goal")[0]
 NAVIGATION_GOAL = ri.action_topic("navigation", "goal")[0]
 
 
-@pytest.mark.django_db
 def test_it_lets_operators_create_update_list_and_delete_locations(operator_api, viewer_api):
     res = operator_api.post("/api/locations/", {"name": "lab", "x": 1.5, "y": -2.0, "yaw": 0.5,
                                                 "description": "robotics lab"}, format="json")
@@ -29,7 +32,6 @@ def test_it_lets_operators_create_update_list_and_delete_locations(operator_api,
     assert not Location.objects.exists()
 
 
-@pytest.mark.django_db
 def test_it_refuses_location_changes_from_viewers(viewer_api):
     Location.objects.create(name="lab", x=1.0, y=2.0)
     assert viewer_api.post("/api/locations/", {"name": "x", "x": 0, "y": 0}, format="json").status_code == 403
@@ -39,7 +41,6 @@ def test_it_refuses_location_changes_from_viewers(viewer_api):
     assert Location.objects.get().x == 1.0
 
 
-@pytest.mark.django_db
 @pytest.mark.parametrize(("body", "field"), [
     ({"name": "bad name", "x": 0, "y": 0}, "name"),
     ({"name": "a", "x": "nan", "y": 0}, "x"),
@@ -52,7 +53,6 @@ def test_it_refuses_invalid_locations(operator_api, body, field):
     assert res.json()["field"] == field
 
 
-@pytest.mark.django_db
 def test_it_saves_the_current_pose_under_a_name(operator_api):
     res = operator_api.post("/api/locations/", {"name": "here", "use_current_pose": True}, format="json")
     assert res.status_code == 400 and res.json()["field"] == "use_current_pose"

@@ -12,6 +12,10 @@ from robot.navigation.shared import MAP_META_KEY, map_dir
 from robot.sim import world
 from robot.state import get_store
 
+# Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
+# sits in a test transaction: these tests need real transactions.
+pytestmark = pytest.mark.django_db(transaction=True)
+
 GOAL_TOPIC = ri.action_topic("move_base", "goal")[0]
 CANCEL_TOPIC = ri.action_topic("move_base", "cancel")[0]
 
@@ -84,7 +88,6 @@ def test_it_refuses_anonymous_callers(anon_api, db):
     assert anon_api.get("/api/map/").status_code in (401, 403)
 
 
-@pytest.mark.django_db
 def test_it_answers_503_when_the_robot_is_offline(operator_api):
     store_glassgarden_map()
     res = operator_api.post("/api/navigation/goal/", {"x": 1.0, "y": -2.0}, format="json")
@@ -92,7 +95,6 @@ def test_it_answers_503_when_the_robot_is_offline(operator_api):
     assert operator_api.get("/api/navigation/status/").json()["goal"] is None
 
 
-@pytest.mark.django_db
 def test_it_answers_503_without_a_map_to_check_against(operator_api):
     res = operator_api.post("/api/navigation/goal/", {"x": 1.0, "y": -2.0}, format="json")
     assert res.status_code == 503 and res.json()["code"] == "no_map"

@@ -28,7 +28,7 @@ export function attachGestures(el, view, { getMode, onView, onHover, onAim, onRe
 
   el.addEventListener("pointerdown", (ev) => {
     const [x, y] = local(ev);
-    el.setPointerCapture(ev.pointerId);
+    try { el.setPointerCapture(ev.pointerId); } catch { /* pointer already gone */ }
     pointers.set(ev.pointerId, { x, y, button: ev.button });
     if (pointers.size === 2) { aim = null; onAim(null); pinch = pinchState(); return; }
     if (pointers.size === 1 && ev.button === 0 && getMode() !== "pan") aim = { x, y };
