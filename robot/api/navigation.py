@@ -13,7 +13,14 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 
 from cyborg_site.roles import is_operator
-from robot.api.serializers_navigation import Goal, LocationSerializer, MapMeta, NavigationStatus, PoseInput
+from robot.api.serializers_navigation import (
+    Goal,
+    InitialPoseResult,
+    LocationSerializer,
+    MapMeta,
+    NavigationStatus,
+    PoseInput,
+)
 from robot.models import Location
 from robot.navigation.goals import agoal_cancel, agoal_send, ainitial_pose_set
 from robot.navigation.locations import alocation_go
@@ -57,7 +64,7 @@ def status_view(request: Request) -> Response:
     return Response(navigation_status())
 
 
-@extend_schema(request=PoseInput, summary="Set the robot's initial pose (/initialpose)")
+@extend_schema(request=PoseInput, responses={200: InitialPoseResult}, summary="Set the robot's initial pose")
 @api_view(["POST"])
 def initial_pose_view(request: Request) -> Response:
     body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=_data(request))

@@ -51,6 +51,11 @@ class RobotPose(serializers.Serializer):
     yaw = serializers.FloatField()
 
 
+class InitialPoseResult(serializers.Serializer):
+    detail = serializers.CharField()
+    pose = RobotPose()
+
+
 class NavigationStatus(serializers.Serializer):
     goal = Goal(allow_null=True)
     robot_pose = RobotPose(allow_null=True)
