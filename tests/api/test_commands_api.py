@@ -6,6 +6,7 @@ import pytest
 
 from robot import interface as ri
 from tests.commands.support import last_audit, motor_calls, received, sent_to_robot, wait_state
+from tests.helpers import wait_until
 
 pytestmark = pytest.mark.django_db
 
@@ -61,8 +62,8 @@ def test_it_speaks_trimmed_text(operator_api, robot):
     spoken = robot.snapshot()["state"]["tts_spoken"]
     res = operator_api.post("/api/robot/speech/", {"text": "  Hello there  "}, format="json")
     assert res.status_code == 200
-    assert received(robot, "text_to_speech") == [{"data": "Hello there"}]
     wait_state(robot, lambda s: s["tts_spoken"] == spoken + 1, "speech finished")
+    assert received(robot, "text_to_speech") == [{"data": "Hello there"}]
 
 
 def test_it_sets_an_emotion_preset(operator_api, robot):
@@ -85,8 +86,8 @@ def test_it_switches_the_emotion_system(operator_api, robot, on):
 def test_it_plays_a_sound_clip(operator_api, robot):
     res = operator_api.post("/api/robot/playback/", {"clip": "laugh"}, format="json")
     assert res.status_code == 200
-    assert received(robot, "playback") == [{"data": "laugh"}]
     wait_state(robot, lambda s: s["playing"] == "laugh", "clip playing")
+    assert received(robot, "playback") == [{"data": "laugh"}]
 
 
 def test_it_sets_the_dome_mode(operator_api, robot):
@@ -124,7 +125,8 @@ def test_it_answers_504_when_the_motors_service_does_not_answer(operator_api, ro
     # A node that advertises the service and never answers it.
     with connect(robot.url) as silent:
         silent.send('{"op": "advertise_service", "service": "/slow/enable", "type": "std_srvs/Empty"}')
-        wait_state(robot, lambda s: True, "advertised")  # one round trip to the simulator's loop
+        wait_until(lambda: robot.call(lambda: "/slow/enable" in robot.robot.broker.client_services),
+                   what="service advertised")
         settings.ROBOT_SERVICES = {"enable_motors": "/slow/enable"}
         settings.ROBOT_REQUEST_TIMEOUT_S = 0.8
         ri.reload()
@@ -148,5 +150,5 @@ def test_it_audits_page_and_token_sources(client, operator, robot):
     res = client.post("/api/robot/speech/", {"text": "from the page"}, content_type="application/json")
     assert res.status_code == 200
     assert last_audit().source == "page"
+    wait_until(lambda: sent_to_robot(robot)["text_to_speech"] == 2, what="both texts arrived")
     assert [m["data"] for m in received(robot, "text_to_speech")] == ["from a script", "from the page"]
-    assert sent_to_robot(robot)["text_to_speech"] == 2

@@ -18,3 +18,7 @@ def robot(sim, link_thread):
 
     wait_ready(sim)
     return sim
+
+
+# The browser tests share the session's real stack and Chromium with tests/browser/.
+from tests.browser.conftest import browser, page, stack  # noqa: E402, F401

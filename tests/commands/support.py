@@ -41,8 +41,14 @@ def sent_to_robot(sim) -> dict[str, int]:
     return counts
 
 
-def nothing_sent(sim) -> bool:
-    return not any(sent_to_robot(sim).values())
+def only_the_marker_arrived(sim, operator_api) -> bool:
+    """Send a marker command after the refused ones: once it has arrived, anything sent before
+    it would have too, so "nothing else reached the robot" is a real check, not a race."""
+    assert operator_api.post("/api/robot/speech/", {"text": "marker"}, format="json").status_code == 200
+    wait_until(lambda: sim.received_count(ri.topic("text_to_speech").name) >= 1, what="the marker")
+    counts = sent_to_robot(sim)
+    assert received(sim, "text_to_speech") == [{"data": "marker"}], received(sim, "text_to_speech")
+    return counts == {**dict.fromkeys(counts, 0), "text_to_speech": 1}
 
 
 def wait_state(sim, predicate, what: str, timeout: float = 10.0) -> dict[str, Any]:
