@@ -10,6 +10,15 @@ from tests.browser.conftest import login
 pytestmark = pytest.mark.browser
 
 
+def _ready_to_drive(page, stack) -> None:
+    """Other browser tests share the robot: no goal, motors on, at reception facing the clear hall."""
+    token = next(c["value"] for c in page.context.cookies() if c["name"] == "csrftoken")
+    for path, body in (("/api/navigation/cancel/", {}), ("/api/robot/motors/", {"enabled": True}),
+                       ("/api/navigation/initial-pose/", {"x": 0.0, "y": -1.0, "yaw": math.pi / 2})):
+        response = page.request.post(f"{stack.url}{path}", data=body, headers={"X-CSRFToken": token})
+        assert response.ok, (path, response.status, response.text())
+
+
 def _pose(page) -> tuple[float, float]:
     data = page.locator("#pose").evaluate("el => [el.dataset.x, el.dataset.y]")
     return float(data[0]), float(data[1])
@@ -19,8 +28,12 @@ def test_it_drives_forward_while_w_is_held_and_stops_on_release(page, stack):
     errors = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     login(page, stack, "otto", next_path="/drive/")
+    _ready_to_drive(page, stack)
     expect(page.locator("#lock-state")).to_have_text("Nobody is driving")
     expect(page.locator("#pose")).not_to_have_attribute("data-x", "")
+    expect(page.locator("#motors")).to_have_text("enabled")
+    page.wait_for_function("() => { const el = document.getElementById('pose');"
+                           " return Math.hypot(Number(el.dataset.x), Number(el.dataset.y) + 1) < 0.05; }")
     start = _pose(page)
 
     page.locator("#drive h2").click()  # the page has the keyboard
@@ -54,6 +67,7 @@ def test_it_shows_the_camera_through_the_server(page, stack):
 
 def test_it_drives_with_the_on_screen_joystick(page, stack):
     login(page, stack, "olga", next_path="/drive/")
+    _ready_to_drive(page, stack)
     expect(page.locator("#lock-state")).to_have_text("Nobody is driving")
     box = page.locator("#stick").bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
