@@ -13,6 +13,7 @@ HOME_KEYS = (
     "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
     "state_change", "state_transitions", "emotional_state", "emotion_system_status",
     "text_to_speech", "tts_feedback", "current_location", "rosout", "robot_pose",
+    "smach_status",
 )
 
 

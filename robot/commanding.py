@@ -10,12 +10,15 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from asgiref.sync import async_to_sync
-from channels.db import database_sync_to_async
+from asgiref.sync import async_to_sync, sync_to_async
 
 from cyborg_site.roles import is_operator
 from robot.audit import audit_record
 from robot.bus import RobotError
+
+# Not database_sync_to_async: it closes the calling thread's connection, which for a
+# synchronous caller (a DRF view calling run_command) is the request's own connection.
+_record = sync_to_async(audit_record, thread_sensitive=True)
 
 
 class Forbidden(RobotError):
@@ -47,9 +50,9 @@ async def arun_command(
     allowed: Callable[[Any], bool] = is_operator,
 ) -> str:
     """Run ``run`` for ``user`` if allowed; audit the outcome; return a human-readable result."""
-    record = database_sync_to_async(audit_record)
+    record = _record
     # The role check may query the user's groups: never from the event loop itself.
-    if not await database_sync_to_async(allowed)(user):
+    if not await sync_to_async(allowed, thread_sensitive=True)(user):
         error = Forbidden("Your role may not command the robot (operators and admins can).")
         await record(user=user, source=source, action=action, params=params, ok=False,
                      outcome=error.message, error_code=error.code)
@@ -70,6 +73,6 @@ def run_command(**kwargs: Any) -> str:
 
 async def arecord_invalid(*, user: Any, source: str, action: str, params: dict[str, Any], error: str) -> None:
     """Audit a command refused for bad input (nothing was sent)."""
-    await database_sync_to_async(audit_record)(
+    await _record(
         user=user, source=source, action=action, params=params, ok=False, outcome=error, error_code="invalid"
     )

@@ -27,6 +27,8 @@ class Topic:
     # Subscribed by the robot link at start so the dashboard can show it.
     monitor: bool = False
     latched: bool = False
+    # Keep this many recent messages so a page opened later still sees them (logs, events).
+    recent: int = 0
 
 
 @dataclass(frozen=True)
@@ -61,18 +63,20 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("global_costmap", "/move_base/global_costmap/costmap", "nav_msgs/OccupancyGrid"),
     _T("local_costmap", "/move_base/local_costmap/costmap", "nav_msgs/OccupancyGrid"),
     _T("particlecloud", "/particlecloud", "geometry_msgs/PoseArray", 1),
-    _T("state_change", "/cyborg_controller/state_change", "cyborg_controller/SystemState", None, True),
+    _T("state_change", "/cyborg_controller/state_change", "cyborg_controller/SystemState", None, True, recent=20),
     _T("state_transitions", "/cyborg_controller/state_transitions", "std_msgs/String", None, True),
     _T("emotional_state", "/cyborg_controller/emotional_state", "cyborg_controller/EmotionalState", 4, True),
     _T("emotion_system_status", "/cyborg_controller/emotional_controller_status", "std_msgs/Bool", 4, True),
     _T("robot_mode", "/cyborg_commander/robot_mode", "std_msgs/String", None, True),
-    _T("text_to_speech", "/cyborg_audio/text_to_speech", "std_msgs/String", None, True),
-    _T("tts_feedback", "/cyborg_audio/feedback_text_to_speech", "std_msgs/String", None, True),
+    _T("text_to_speech", "/cyborg_audio/text_to_speech", "std_msgs/String", None, True, recent=10),
+    _T("tts_feedback", "/cyborg_audio/feedback_text_to_speech", "std_msgs/String", None, True, recent=10),
     _T("playback_feedback", "/cyborg_audio/feedback_playback", "std_msgs/String", None, True),
     _T("current_location", "/cyborg_navigation/current_location", "std_msgs/String", None, True),
-    _T("smach_status", "/controller_viewer/smach/container_status", "smach_msgs/SmachContainerStatus", 4),
+    # Every container publishes on this topic; keep each one's latest (no coalescing across paths).
+    _T("smach_status", "/controller_viewer/smach/container_status", "smach_msgs/SmachContainerStatus", None, True,
+       recent=8),
     _T("smach_structure", "/controller_viewer/smach/container_structure", "smach_msgs/SmachContainerStructure", 1),
-    _T("rosout", "/rosout", "rosgraph_msgs/Log", None, True),
+    _T("rosout", "/rosout", "rosgraph_msgs/Log", None, True, recent=200),
     _T("tf", "/tf", "tf2_msgs/TFMessage", 5),
     _T("tf_static", "/tf_static", "tf2_msgs/TFMessage", None, latched=True),
     _T("client_count", "/client_count", "std_msgs/Int32", None, latched=True),

@@ -102,7 +102,7 @@ class RobotLink:
                 pass
         self._tasks.clear()
         if self._coalescer is not None:
-            self._coalescer.close()
+            await self._coalescer.aclose()
         if self.ros is not None:
             ros, self.ros = self.ros, None
             for topic in list(self._subscriptions.values()):
@@ -110,6 +110,9 @@ class RobotLink:
             ros.factory.stopTrying()
             if ros.is_connected:
                 await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
+        for task in list(self._inflight):
+            task.cancel()
+        await asyncio.gather(*self._inflight, return_exceptions=True)
         self.connected = False
 
     def _spawn(self, coro: Any) -> None:
@@ -144,6 +147,8 @@ class RobotLink:
         return set(self._subscriptions)
 
     def _on_message(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        if self._stopped:
+            return
         for listener in self.listeners:
             try:
                 listener(name, msg_type, msg, t)
@@ -166,16 +171,23 @@ class RobotLink:
 
     async def _send_update(self, update: TopicUpdate) -> None:
         await self.store.aput(update["key"], dict(update))
+        recent = ri.topic(update["key"]).recent
+        if recent:
+            await self.store.aappend_recent(update["key"], dict(update), recent)
         await self.layer.group_send(topic_group(update["key"]), update)
 
     # --- connection status -----------------------------------------------------------
 
     def _on_ready(self) -> None:
+        if self._stopped:
+            return
         self.connected, self.since, self.attempts = True, time.time(), 0
         log.info("robot link connected to %s", self.url)
         self._spawn(self._publish_status())
 
     def _on_close(self) -> None:
+        if self._stopped:
+            return
         if self.connected:
             log.warning("robot link lost %s; reconnecting", self.url)
             self.since = time.time()

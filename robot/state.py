@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections import deque
 from typing import Any, Protocol
 
 from django.conf import settings
@@ -21,11 +22,23 @@ class StateStore(Protocol):
     def get_all(self) -> dict[str, dict[str, Any]]: ...
     def put(self, key: str, entry: dict[str, Any]) -> None: ...
     def clear(self) -> None: ...
+    async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None: ...
+    async def aget_recent(self, key: str) -> list[dict[str, Any]]: ...
 
 
 class MemoryStore:
     def __init__(self) -> None:
         self._data: dict[str, dict[str, Any]] = {}
+        self._recent: dict[str, deque[dict[str, Any]]] = {}
+
+    async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None:
+        ring = self._recent.get(key)
+        if ring is None or ring.maxlen != maxlen:
+            ring = self._recent[key] = deque(ring or (), maxlen=maxlen)
+        ring.append(entry)
+
+    async def aget_recent(self, key: str) -> list[dict[str, Any]]:
+        return list(self._recent.get(key, ()))
 
     async def aput(self, key: str, entry: dict[str, Any]) -> None:
         self._data[key] = entry
@@ -41,6 +54,7 @@ class MemoryStore:
 
     def clear(self) -> None:
         self._data.clear()
+        self._recent.clear()
 
 
 class RedisStore:
@@ -79,8 +93,16 @@ class RedisStore:
     def get_all(self) -> dict[str, dict[str, Any]]:
         return {k.decode(): json.loads(v) for k, v in self._sync.hgetall(self._name).items()}
 
+    async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None:
+        name = f"{self._name}:recent:{key}"
+        async with self._aclient().pipeline(transaction=False) as pipe:
+            await pipe.rpush(name, json.dumps(entry)).ltrim(name, -maxlen, -1).execute()
+
+    async def aget_recent(self, key: str) -> list[dict[str, Any]]:
+        return [json.loads(v) for v in await self._aclient().lrange(f"{self._name}:recent:{key}", 0, -1)]
+
     def clear(self) -> None:
-        self._sync.delete(self._name)
+        self._sync.delete(self._name, *self._sync.keys(f"{self._name}:recent:*"))
 
 
 _store: StateStore | None = None

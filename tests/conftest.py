@@ -76,8 +76,17 @@ def admin_api(admin_user):
 # --- backing services ----------------------------------------------------------------------
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _private_redis_prefix():
+    """Concurrent test runs on one Redis must not see each other's channels and state."""
+    import os
+
+    if django_settings.REDIS_URL:
+        django_settings.CHANNEL_LAYERS["default"]["CONFIG"]["prefix"] = f"cyborg-test-{os.getpid()}"
+
+
 @pytest.fixture(autouse=True)
-def _fresh_layer_and_store():
+def _fresh_layer_and_store(_private_redis_prefix):
     """Each test gets an empty channel layer and latest-state store."""
     from robot import interface
     from robot.state import get_store, reset_store
@@ -115,6 +124,16 @@ async def link(sim, settings):
         task.cancel()
     await hosted.stop()
     link_module.current = None
+    await close_layer()
+
+
+async def close_layer() -> None:
+    """channels_redis keeps receive tasks and pools per loop; close them before the loop ends."""
+    from channels.layers import get_channel_layer
+
+    layer = get_channel_layer()
+    if hasattr(layer, "close_pools"):
+        await layer.close_pools()
 
 
 class LinkThread:

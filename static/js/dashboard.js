@@ -20,7 +20,14 @@ const renderers = {
   motors_state(m) { set("motors.state", m.data ? "enabled" : "disabled"); },
   robot_mode(m) { set("mode.requested", m.data); },
   current_location(m) { set("location.current", m.data || "(none)"); },
+  smach_status(m) {
+    smachActive[m.path] = m.active_states || [];
+    const chain = smachChain();
+    set("smach.active", chain.join(" › ") || "—");
+    if (!sawStateChange && chain.length) set("smach.current", chain[chain.length - 1]);
+  },
   state_change(m) {
+    sawStateChange = true;
     set("smach.current", m.to_system_state);
     set("smach.previous", m.from_system_state || "—");
     set("smach.event", m.event || "—");
@@ -42,6 +49,22 @@ const renderers = {
   tts_feedback(m) { set("tts.feedback", m.data); },
   rosout(m) { logLine(m); },
 };
+
+// SMACH introspection: each container reports its active states; the chain from the
+// top container down names where the robot is even before the next transition.
+const smachActive = {};
+let sawStateChange = false;
+function smachChain() {
+  const chain = [];
+  for (const path of Object.keys(smachActive).sort((a, b) => a.length - b.length)) {
+    const parent = chain[chain.length - 1];
+    if (!chain.length || path.endsWith(`/${parent}`)) {
+      const active = smachActive[path][0];
+      if (active) chain.push(active);
+    }
+  }
+  return chain;
+}
 
 // --- alerts strip ----------------------------------------------------------------------
 const alerts = document.getElementById("alerts");

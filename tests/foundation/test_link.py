@@ -119,3 +119,26 @@ async def test_it_refuses_to_watch_unknown_or_bulky_topics(link, viewer):
     frame = await receive_until(communicator, lambda f: f["kind"] == "error")
     assert "map" in frame["message"] and "no_such_key" in frame["message"]
     await communicator.disconnect()
+
+
+async def test_it_replays_recent_log_lines_to_a_page_opened_later(link, sim, viewer):
+    from robot.state import get_store
+
+    loop = asyncio.get_running_loop()
+    for i in range(3):
+        await loop.run_in_executor(None, sim.call, lambda i=i: sim.robot.rosout(8, "/cyborg_test", f"boom {i}"))
+
+    async def stored():
+        return [e["msg"]["msg"] for e in await get_store().aget_recent("rosout")]
+
+    deadline = loop.time() + 5
+    while "boom 2" not in await stored():
+        assert loop.time() < deadline, "the link never stored the log lines"
+        await asyncio.sleep(0.05)
+    communicator = await watch(viewer, "rosout")
+    seen = []
+    while "boom 2" not in seen:
+        frame = await receive_until(communicator, lambda f: f["kind"] == "update" and f["key"] == "rosout")
+        seen.append(frame["msg"]["msg"])
+    assert [m for m in seen if m.startswith("boom")] == ["boom 0", "boom 1", "boom 2"]
+    await communicator.disconnect()
