@@ -6,6 +6,7 @@ from rest_framework.permissions import IsAuthenticated
 from robot.api import commands
 from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
+from robot.api.common import API_AUTHENTICATION
 from robot.api.state import RobotStateView
 
 urlpatterns = [
@@ -20,7 +21,8 @@ urlpatterns = [
     path("robot/playback/", commands.PlaybackView.as_view(), name="api-robot-playback"),
     path("robot/dome/", commands.DomeView.as_view(), name="api-robot-dome"),
     path("audit/", AuditListView.as_view(), name="api-audit"),
-    path("schema/", SpectacularAPIView.as_view(permission_classes=[IsAuthenticated]), name="api-schema"),
+    path("schema/", SpectacularAPIView.as_view(authentication_classes=API_AUTHENTICATION,
+                                                 permission_classes=[IsAuthenticated]), name="api-schema"),
     # Swagger UI from drf-spectacular-sidecar's static files: works without internet access.
     path("docs/", login_required(SpectacularSwaggerView.as_view(url_name="api-schema")), name="api-docs"),
 ]

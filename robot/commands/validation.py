@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from channels.db import database_sync_to_async
+from asgiref.sync import sync_to_async
 
 from robot import interface as ri
 from robot.commanding import InvalidCommand
@@ -63,9 +63,10 @@ def clean_mode(value: Any) -> ri.Mode:
 
 async def _preset(model: type, value: Any, field: str, what: str) -> str:
     name = _text(value, field)
-    exists = await database_sync_to_async(model.objects.filter(name=name).exists)() if name else False
+    # Thread-sensitive like the audit write: runs where the caller's request owns its connection.
+    exists = await sync_to_async(model.objects.filter(name=name).exists, thread_sensitive=True)() if name else False
     if not exists:
-        names = await database_sync_to_async(lambda: list(model.objects.values_list("name", flat=True)))()
+        names = await sync_to_async(lambda: list(model.objects.values_list("name", flat=True)), thread_sensitive=True)()
         raise InvalidCommand(f"{field}: unknown {what} {name!r}; known: {', '.join(names) or 'none'}.", field=field)
     return name
 

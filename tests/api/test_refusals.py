@@ -83,7 +83,9 @@ def test_it_answers_503_when_offline_and_fires_nothing_later(operator_api, sim, 
         assert only_the_marker_arrived(revived, operator_api), sent_to_robot(revived)
 
 
-def test_it_refuses_a_second_mode_change_while_one_runs(operator, robot, transactional_db):
+# Two requests on two threads: each needs the committed users and presets.
+@pytest.mark.django_db(transaction=True, serialized_rollback=True)
+def test_it_refuses_a_second_mode_change_while_one_runs(operator, robot):
     import threading
 
     from rest_framework.test import APIClient

@@ -53,7 +53,8 @@ async def test_it_lets_the_redis_lock_expire_if_its_holder_dies(settings):
         await client.aclose()
 
 
-async def test_it_shows_every_watcher_the_requested_mode(link, sim, operator, viewer, transactional_db):
+@pytest.mark.django_db(transaction=True, serialized_rollback=True)
+async def test_it_shows_every_watcher_the_requested_mode(link, sim, operator, viewer):
     wait_ready(sim)
     communicator = ws_communicator(viewer)
     await communicator.connect()
