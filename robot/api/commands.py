@@ -41,62 +41,45 @@ class _CommandView(APIView):
         return Response({"ok": True, "action": self.action_name, "outcome": outcome})
 
 
-def _doc(summary: str, description: str, fields: dict[str, serializers.Field], *errors: int):
+def _command_view(name: str, *, action: str, field: str, command: Callable[..., Awaitable[str]], summary: str,
+                  description: str, input_field: serializers.Field, errors: tuple[int, ...] = ()) -> type[APIView]:
+    """One view per command: the class, and its OpenAPI description."""
+    view = type(name, (_CommandView,), {"action_name": action, "field": field, "command": staticmethod(command),
+                                        "__doc__": description})
     return extend_schema(
         summary=summary, description=description, tags=["commands"],
-        request=inline_serializer(f"{summary.title().replace(' ', '')}In", fields),
+        request=inline_serializer(f"{name.removesuffix('View')}In", {field: input_field}),
         responses={200: CommandOut, **error_responses(400, 401, 403, 429, 503, 504, *errors)},
-    )
+    )(view)
 
 
-@_doc("Change mode", "Behaviour, Demo, Manual or Stop. With `MODE_COMMANDER=server` the server runs the "
-      "commander's sequence itself; with `robot` it publishes the mode on `robot_mode`.",
-      {"mode": serializers.ChoiceField(choices=MODE_NAMES)}, 409)
-class ModeView(_CommandView):
-    action_name, field = "mode", "mode"
-    command = staticmethod(modes.achange_mode)
-
-
-@_doc("Send event", "Register a state machine event (see `available_events` in the robot state).",
-      {"event": serializers.RegexField(r"^[A-Za-z0-9_]+$", max_length=EVENT_MAX)})
-class EventView(_CommandView):
-    action_name, field = "event", "event"
-    command = staticmethod(tool.asend_event)
-
-
-@_doc("Speak", "Text to speech; requests queue on the robot.",
-      {"text": serializers.CharField(max_length=SPEECH_MAX)})
-class SpeechView(_CommandView):
-    action_name, field = "speech", "text"
-    command = staticmethod(tool.asay)
-
-
-@_doc("Set emotion", "One of the emotion presets (managed in the admin).", {"emotion": serializers.CharField()})
-class EmotionView(_CommandView):
-    action_name, field = "emotion", "emotion"
-    command = staticmethod(tool.aset_emotion)
-
-
-@_doc("Emotion system", "Switch the emotion system on or off.", {"on": serializers.BooleanField()})
-class EmotionSystemView(_CommandView):
-    action_name, field = "emotion_system", "on"
-    command = staticmethod(tool.aset_emotion_system)
-
-
-@_doc("Motors", "Enable or disable the motors through the RosAria services.",
-      {"enabled": serializers.BooleanField()}, 502)
-class MotorsView(_CommandView):
-    action_name, field = "motors", "enabled"
-    command = staticmethod(motors.aset_motors)
-
-
-@_doc("Play sound", "Play one of the sound clips (managed in the admin).", {"clip": serializers.CharField()})
-class PlaybackView(_CommandView):
-    action_name, field = "playback", "clip"
-    command = staticmethod(tool.aplay_clip)
-
-
-@_doc("Dome mode", "Set the LED dome's visual mode (managed in the admin).", {"mode": serializers.CharField()})
-class DomeView(_CommandView):
-    action_name, field = "dome", "mode"
-    command = staticmethod(tool.aset_dome)
+ModeView = _command_view(
+    "ModeView", action="mode", field="mode", command=modes.achange_mode, summary="Change mode",
+    description="Behaviour, Demo, Manual or Stop. With `MODE_COMMANDER=server` the server runs the commander's "
+                "sequence itself; with `robot` it publishes the mode on `robot_mode`. One change at a time (409).",
+    input_field=serializers.ChoiceField(choices=MODE_NAMES), errors=(409,))
+EventView = _command_view(
+    "EventView", action="event", field="event", command=tool.asend_event, summary="Send event",
+    description="Register a state machine event (see `available_events` in the robot state).",
+    input_field=serializers.RegexField(r"^[A-Za-z0-9_]+$", max_length=EVENT_MAX))
+SpeechView = _command_view(
+    "SpeechView", action="speech", field="text", command=tool.asay, summary="Speak",
+    description="Text to speech (trimmed, 1-500 characters); requests queue on the robot.",
+    input_field=serializers.CharField(max_length=SPEECH_MAX))
+EmotionView = _command_view(
+    "EmotionView", action="emotion", field="emotion", command=tool.aset_emotion, summary="Set emotion",
+    description="One of the emotion presets (managed in the admin).", input_field=serializers.CharField())
+EmotionSystemView = _command_view(
+    "EmotionSystemView", action="emotion_system", field="on", command=tool.aset_emotion_system,
+    summary="Emotion system", description="Switch the emotion system on or off.",
+    input_field=serializers.BooleanField())
+MotorsView = _command_view(
+    "MotorsView", action="motors", field="enabled", command=motors.aset_motors, summary="Motors",
+    description="Enable or disable the motors through the RosAria services; 502 carries the service's error.",
+    input_field=serializers.BooleanField(), errors=(502,))
+PlaybackView = _command_view(
+    "PlaybackView", action="playback", field="clip", command=tool.aplay_clip, summary="Play sound",
+    description="Play one of the sound clips (managed in the admin).", input_field=serializers.CharField())
+DomeView = _command_view(
+    "DomeView", action="dome", field="mode", command=tool.aset_dome, summary="Dome mode",
+    description="Set the LED dome's visual mode (managed in the admin).", input_field=serializers.CharField())

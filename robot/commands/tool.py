@@ -2,11 +2,14 @@
 
 Each command is ``a<verb>(*, user, source, <value>)``: it runs through ``arun_command``
 (role check, audit) and validates inside the run, before anything is published, so a
-refusal for bad input is audited like any other failure.
+refusal for bad input is audited like any other failure. All of them publish one
+``std_msgs/String``; they differ in the check, the topic and the words of the outcome.
 """
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from robot import bus
@@ -15,55 +18,51 @@ from robot.commanding import arun_command
 from robot.commands import validation as v
 
 
-async def asend_event(*, user: Any, source: str, event: Any) -> str:
+async def _send_string(
+    *, user: Any, source: str, action: str, field: str, value: Any, key: str,
+    clean: Callable[[Any], str | Awaitable[str]], outcome: Callable[[str], str],
+) -> str:
     async def run() -> str:
-        name = v.clean_event(event)
-        await bus.apublish("register_event", {"data": name})
-        return f"Sent event {name}"
+        data = clean(value)
+        if inspect.isawaitable(data):
+            data = await data
+        await bus.apublish(key, {"data": data})
+        return outcome(data)
 
-    return await arun_command(user=user, source=source, action="event", params={"event": event}, run=run)
+    return await arun_command(user=user, source=source, action=action, params={field: value}, run=run)
+
+
+def _switch(on: Any) -> str:
+    return ri.EMOTION_SYSTEM_ON if v.clean_bool(on, "on") else ri.EMOTION_SYSTEM_OFF
+
+
+async def asend_event(*, user: Any, source: str, event: Any) -> str:
+    return await _send_string(user=user, source=source, action="event", field="event", value=event,
+                              key="register_event", clean=v.clean_event, outcome=lambda e: f"Sent event {e}")
 
 
 async def asay(*, user: Any, source: str, text: Any) -> str:
-    async def run() -> str:
-        clean = v.clean_speech(text)
-        await bus.apublish("text_to_speech", {"data": clean})
-        return f"Queued {len(clean)} characters for speech"
-
-    return await arun_command(user=user, source=source, action="speech", params={"text": text}, run=run)
+    return await _send_string(user=user, source=source, action="speech", field="text", value=text,
+                              key="text_to_speech", clean=v.clean_speech,
+                              outcome=lambda t: f"Queued {len(t)} characters for speech")
 
 
 async def aset_emotion(*, user: Any, source: str, emotion: Any) -> str:
-    async def run() -> str:
-        name = await v.clean_emotion(emotion)
-        await bus.apublish("set_emotional_state", {"data": name})
-        return f"Set emotion {name}"
-
-    return await arun_command(user=user, source=source, action="emotion", params={"emotion": emotion}, run=run)
+    return await _send_string(user=user, source=source, action="emotion", field="emotion", value=emotion,
+                              key="set_emotional_state", clean=v.clean_emotion, outcome=lambda e: f"Set emotion {e}")
 
 
 async def aset_emotion_system(*, user: Any, source: str, on: Any) -> str:
-    async def run() -> str:
-        enabled = v.clean_bool(on, "on")
-        await bus.apublish("emotional_controller", {"data": ri.EMOTION_SYSTEM_ON if enabled else ri.EMOTION_SYSTEM_OFF})
-        return f"Emotion system {'on' if enabled else 'off'}"
-
-    return await arun_command(user=user, source=source, action="emotion_system", params={"on": on}, run=run)
+    return await _send_string(user=user, source=source, action="emotion_system", field="on", value=on,
+                              key="emotional_controller", clean=_switch,
+                              outcome=lambda s: f"Emotion system {s.lower()}")
 
 
 async def aplay_clip(*, user: Any, source: str, clip: Any) -> str:
-    async def run() -> str:
-        name = await v.clean_clip(clip)
-        await bus.apublish("playback", {"data": name})
-        return f"Playing {name}"
-
-    return await arun_command(user=user, source=source, action="playback", params={"clip": clip}, run=run)
+    return await _send_string(user=user, source=source, action="playback", field="clip", value=clip,
+                              key="playback", clean=v.clean_clip, outcome=lambda c: f"Playing {c}")
 
 
 async def aset_dome(*, user: Any, source: str, mode: Any) -> str:
-    async def run() -> str:
-        name = await v.clean_dome_mode(mode)
-        await bus.apublish("domecontrol", {"data": name})
-        return f"Dome mode {name}"
-
-    return await arun_command(user=user, source=source, action="dome", params={"mode": mode}, run=run)
+    return await _send_string(user=user, source=source, action="dome", field="mode", value=mode,
+                              key="domecontrol", clean=v.clean_dome_mode, outcome=lambda d: f"Dome mode {d}")

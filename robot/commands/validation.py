@@ -27,24 +27,24 @@ def _text(value: Any, field: str) -> str:
     return value.strip()
 
 
+def _bounded(value: Any, field: str, limit: int, empty: str) -> str:
+    text = _text(value, field)
+    if not text:
+        raise InvalidCommand(f"{field}: {empty}", field=field)
+    if len(text) > limit:
+        raise InvalidCommand(f"{field}: at most {limit} characters (got {len(text)}).", field=field)
+    return text
+
+
 def clean_event(value: Any) -> str:
-    event = _text(value, "event")
-    if not event:
-        raise InvalidCommand("event: name an event (e.g. aborted).", field="event")
-    if len(event) > EVENT_MAX:
-        raise InvalidCommand(f"event: at most {EVENT_MAX} characters.", field="event")
+    event = _bounded(value, "event", EVENT_MAX, "name an event (e.g. aborted).")
     if not _EVENT_RE.match(event):
         raise InvalidCommand("event: use letters, digits and '_' only.", field="event")
     return event
 
 
 def clean_speech(value: Any) -> str:
-    text = _text(value, "text")
-    if not text:
-        raise InvalidCommand("text: say something (the text is empty).", field="text")
-    if len(text) > SPEECH_MAX:
-        raise InvalidCommand(f"text: at most {SPEECH_MAX} characters (got {len(text)}).", field="text")
-    return text
+    return _bounded(value, "text", SPEECH_MAX, "say something (the text is empty).")
 
 
 def clean_bool(value: Any, field: str) -> bool:
