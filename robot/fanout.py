@@ -19,6 +19,10 @@ log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
 
+# A topic whose messages arrive at most this much of a period early counts as published at
+# its UI rate and passes straight through.
+JITTER_SLACK = 0.2
+
 
 class Coalescer:
     def __init__(self, send: Send, *, loop: asyncio.AbstractEventLoop, max_backlog: int = 5000) -> None:
@@ -27,10 +31,12 @@ class Coalescer:
         self._max_backlog = max_backlog
         self._outbox: OrderedDict[Any, Any] = OrderedDict()
         self._last_sent: dict[str, float] = {}
+        self._last_arrival: dict[str, float] = {}
         self._waiting: dict[str, Any] = {}  # key -> latest value held back by the rate limit
         self._timers: dict[str, asyncio.TimerHandle] = {}
         self._seq = itertools.count()
         self._wake = asyncio.Event()
+        self._closed = False
         self._task = loop.create_task(self._drain())
         self.dropped = 0
 
@@ -38,11 +44,20 @@ class Coalescer:
         if rate_hz is None:
             self._enqueue((key, next(self._seq)), value)
             return
+        now = time.monotonic()
+        previous = self._last_arrival.get(key)
+        self._last_arrival[key] = now
         if key in self._timers:
             self._waiting[key] = value
             return
         gap = 1.0 / rate_hz
-        wait = self._last_sent.get(key, 0.0) + gap - time.monotonic()
+        # Judge an on-rate topic by its arrival gaps, not by the last release: holding a message
+        # that is early only by jitter would push every later release back by as much, so one
+        # late message would make the topic lag (up to a period) for as long as it runs.
+        if previous is not None and now - previous >= gap * (1.0 - JITTER_SLACK):
+            wait = 0.0
+        else:
+            wait = self._last_sent.get(key, 0.0) + gap - now
         if wait <= 0:
             self._release(key, value)
         else:
@@ -69,10 +84,12 @@ class Coalescer:
         self._wake.set()
 
     async def _drain(self) -> None:
-        while True:
+        # Exit on a flag, not only on cancellation: redis-py may turn a cancel into a
+        # ConnectionError, which the send's error handling would otherwise swallow.
+        while not self._closed:
             await self._wake.wait()
             self._wake.clear()
-            while self._outbox:
+            while self._outbox and not self._closed:
                 _, value = self._outbox.popitem(last=False)
                 try:
                     await self._send(value)
@@ -80,6 +97,8 @@ class Coalescer:
                     log.exception("fan-out send failed")
 
     def close(self) -> None:
+        self._closed = True
+        self._wake.set()
         self._task.cancel()
         for timer in self._timers.values():
             timer.cancel()

@@ -64,6 +64,7 @@ class RobotLink:
         self._tasks: list[asyncio.Task] = []
         self._coalescer: Coalescer | None = None
         self._stopped = False
+        self._serving: asyncio.Future | None = None
         self._inflight: set[asyncio.Future] = set()
 
     # --- lifecycle -------------------------------------------------------------------
@@ -88,11 +89,19 @@ class RobotLink:
             self.subscribe(t.name, t.type)
         self._tasks.append(asyncio.ensure_future(self._heartbeat()))
         if serve_requests:
-            self._tasks.append(asyncio.ensure_future(self._serve()))
+            self._serving = asyncio.ensure_future(self._serve())
+            self._tasks.append(self._serving)
         await self._publish_status()
 
     async def stop(self) -> None:
         self._stopped = True
+        if self._serving is not None:
+            # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
+            await self.layer.send(LINK_CHANNEL, {"type": "link.stop"})
+            try:
+                await asyncio.wait_for(asyncio.shield(self._serving), 3)
+            except TimeoutError:
+                log.warning("robot link request loop did not stop in time")
         for task in self._tasks:
             task.cancel()
         for task in self._tasks:
@@ -210,7 +219,7 @@ class RobotLink:
             log.exception("could not publish link status")
 
     async def _heartbeat(self) -> None:
-        while True:
+        while not self._stopped:
             await asyncio.sleep(LINK_HEARTBEAT_S)
             # Failed connection attempts emit no "close"; count them from the factory.
             if self.ros is not None and not self.connected:
@@ -243,8 +252,12 @@ class RobotLink:
     # --- requests from web processes and tasks ---------------------------------------
 
     async def _serve(self) -> None:
-        while True:
+        while not self._stopped:
             request = await self.layer.receive(LINK_CHANNEL)
+            if request.get("type") == "link.stop":
+                if self._stopped:
+                    return
+                continue  # a stale stop message from an earlier link
             self._spawn(self._handle(request))
 
     async def _handle(self, request: LinkRequest) -> None:

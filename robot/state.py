@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import time
+import weakref
 from collections import deque
 from typing import Any, Protocol
 
@@ -65,17 +66,18 @@ class RedisStore:
         self._name = name
         self._sync = redis.Redis.from_url(url)
         self._async_url = url
-        self._async_clients: dict[int, Any] = {}
+        # Keyed by the loop object, not id(): a new loop may reuse a dead loop's id.
+        self._async_clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
         self._aioredis = redis.asyncio
 
     def _aclient(self):
         # An asyncio client is bound to the loop it was first used on.
         import asyncio
 
-        loop_id = id(asyncio.get_running_loop())
-        client = self._async_clients.get(loop_id)
+        loop = asyncio.get_running_loop()
+        client = self._async_clients.get(loop)
         if client is None:
-            client = self._async_clients[loop_id] = self._aioredis.Redis.from_url(self._async_url)
+            client = self._async_clients[loop] = self._aioredis.Redis.from_url(self._async_url)
         return client
 
     async def aput(self, key: str, entry: dict[str, Any]) -> None:

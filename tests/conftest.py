@@ -124,16 +124,6 @@ async def link(sim, settings):
         task.cancel()
     await hosted.stop()
     link_module.current = None
-    await close_layer()
-
-
-async def close_layer() -> None:
-    """channels_redis keeps receive tasks and pools per loop; close them before the loop ends."""
-    from channels.layers import get_channel_layer
-
-    layer = get_channel_layer()
-    if hasattr(layer, "close_pools"):
-        await layer.close_pools()
 
 
 class LinkThread:
