@@ -10,9 +10,16 @@ from channels.layers import channel_layers
 from django.conf import settings as django_settings
 
 from cyborg_site.roles import Role
+from tests.browser.support import browser, page, stack  # noqa: F401  (shared session fixtures)
 from tests.helpers import async_wait_until, wait_until
 
 PASSWORD = "correct-horse-battery"
+
+
+def pytest_collection_modifyitems(config, items):
+    """Browser tests last: Playwright's sync API leaves an event loop running in the main
+    thread, which async tests after it cannot share."""
+    items.sort(key=lambda item: item.get_closest_marker("browser") is not None)
 
 
 # --- users by role -----------------------------------------------------------------------

@@ -21,4 +21,4 @@ def robot(sim, link_thread):
 
 
 # The browser tests share the session's real stack and Chromium with tests/browser/.
-from tests.browser.conftest import browser, page, stack  # noqa: E402, F401
+from tests.browser.support import browser, page, stack  # noqa: E402, F401

@@ -1,4 +1,6 @@
-"""A real product (simulator + Daphne processes) and a real headless Chromium, shared per session."""
+"""A real product (simulator + Daphne processes) and a real headless Chromium, shared per session.
+
+The fixtures are registered in tests/conftest.py so every folder shares one stack and browser."""
 
 from __future__ import annotations
 
