@@ -50,3 +50,21 @@ async def test_it_bounds_its_backlog_when_the_layer_is_slow():
     coalescer.close()
     assert coalescer.dropped >= 89
     assert sent[-1] == 99 and len(sent) <= 11
+
+
+async def test_it_passes_a_topic_published_at_its_ui_rate_straight_through_after_a_late_message():
+    sent = []
+
+    async def send(value):
+        sent.append(value)
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop())
+    # 10 Hz topic at a 10 Hz UI rate: one message arrives 10 ms late, the next ones on time
+    # (90 ms after it). None may be held back, or the lag would stick to every later message.
+    for i, gap in enumerate((0.0, 0.11, 0.09, 0.1, 0.1)):
+        await asyncio.sleep(gap)
+        coalescer.offer("odom", 10.0, i)
+        for _ in range(3):
+            await asyncio.sleep(0)
+        assert sent == list(range(i + 1)), f"message {i} was held back"
+    coalescer.close()
