@@ -47,28 +47,29 @@ class EmotionPreset(models.Model):
         return self.name
 
 
-class SoundClip(models.Model):
-    name = models.CharField(max_length=64, unique=True, validators=[_slug], help_text="Clip name the robot plays.")
+class NamedOption(models.Model):
+    """A name the robot understands, with a friendly label for the pages."""
+
+    name = models.CharField(max_length=64, unique=True, validators=[_slug])
     label = models.CharField(max_length=100, blank=True)
     description = models.CharField(max_length=200, blank=True)
 
     class Meta:
+        abstract = True
         ordering = ["name"]
 
     def __str__(self) -> str:
         return self.label or self.name
 
 
-class DomeMode(models.Model):
-    name = models.CharField(max_length=64, unique=True, validators=[_slug], help_text="Visual mode string.")
-    label = models.CharField(max_length=100, blank=True)
-    description = models.CharField(max_length=200, blank=True)
+class SoundClip(NamedOption):
+    class Meta(NamedOption.Meta):
+        pass
 
-    class Meta:
-        ordering = ["name"]
 
-    def __str__(self) -> str:
-        return self.label or self.name
+class DomeMode(NamedOption):
+    class Meta(NamedOption.Meta):
+        pass
 
 
 class Location(models.Model):

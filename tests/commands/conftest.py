@@ -19,6 +19,3 @@ def robot(sim, link_thread):
     wait_ready(sim)
     return sim
 
-
-# The browser tests share the session's real stack and Chromium with tests/browser/.
-from tests.browser.support import browser, page, stack  # noqa: E402, F401

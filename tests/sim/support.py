@@ -13,6 +13,8 @@ from typing import Any
 import roslibpy
 from websockets.sync.client import ClientConnection, connect
 
+from tests.helpers import wait_until
+
 # State timers short enough for a fast suite.
 FAST = dict(startup_s=0.3, demo_s=1.0, behaviour_s=0.4, tts_s_per_char=0.01, tts_min_s=0.1, clip_s=0.2,
             nav_speed=1.0, commander_pause_s=0.1)
@@ -121,12 +123,4 @@ def on_topic(topic: str) -> Callable[[dict[str, Any]], bool]:
     return lambda f: f.get("op") == "publish" and f.get("topic") == topic
 
 
-def wait_until(predicate: Callable[[], Any], timeout: float = 5.0, what: str = "") -> Any:
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what or predicate}")
-        time.sleep(0.02)
+__all__ = ["wait_until"]
