@@ -18,7 +18,16 @@ import roslibpy
 
 from robot import interface as ri
 from robot.fanout import Coalescer
-from robot.groups import LINK_CHANNEL, STATUS_GROUP, LinkReply, LinkRequest, LinkStatus, TopicUpdate, topic_group
+from robot.groups import (
+    LINK_CHANNEL,
+    STATUS_GROUP,
+    LinkReply,
+    LinkRequest,
+    LinkStatus,
+    SharedMessage,
+    TopicUpdate,
+    topic_group,
+)
 from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
 
 log = logging.getLogger(__name__)
@@ -183,7 +192,7 @@ class RobotLink:
         recent = ri.topic(update["key"]).recent
         if recent:
             await self.store.aappend_recent(update["key"], dict(update), recent)
-        await self.layer.group_send(topic_group(update["key"]), update)
+        await self.layer.group_send(topic_group(update["key"]), {**update, "msg": SharedMessage(update["msg"])})
 
     # --- connection status -----------------------------------------------------------
 
