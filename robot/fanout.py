@@ -102,10 +102,3 @@ class Coalescer:
         self._task.cancel()
         for timer in self._timers.values():
             timer.cancel()
-
-    async def aclose(self) -> None:
-        self.close()
-        try:
-            await self._task
-        except asyncio.CancelledError:
-            pass

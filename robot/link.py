@@ -103,24 +103,20 @@ class RobotLink:
         await self._publish_status()
 
     async def stop(self) -> None:
+        """Stop within a few seconds whatever the network does (every wait is bounded)."""
         self._stopped = True
         if self._serving is not None:
             # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
-            await self.layer.send(LINK_CHANNEL, {"type": "link.stop"})
             try:
-                await asyncio.wait_for(asyncio.shield(self._serving), 3)
-            except TimeoutError:
+                await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
+                await asyncio.wait_for(asyncio.shield(self._serving), 2)
+            except (TimeoutError, Exception):
                 log.warning("robot link request loop did not stop in time")
-        for task in self._tasks:
-            task.cancel()
-        for task in self._tasks:
-            try:
-                await task
-            except (asyncio.CancelledError, Exception):
-                pass
+        await _cancel_within(self._tasks, 2)
         self._tasks.clear()
         if self._coalescer is not None:
-            await self._coalescer.aclose()
+            await _cancel_within([self._coalescer._task], 1)
+            self._coalescer.close()
         if self.ros is not None:
             ros, self.ros = self.ros, None
             for topic in list(self._subscriptions.values()):
@@ -128,9 +124,7 @@ class RobotLink:
             ros.factory.stopTrying()
             if ros.is_connected:
                 await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
-        for task in list(self._inflight):
-            task.cancel()
-        await asyncio.gather(*self._inflight, return_exceptions=True)
+        await _cancel_within(list(self._inflight), 1)
         self.connected = False
 
     def _spawn(self, coro: Any) -> None:
@@ -324,6 +318,15 @@ class RobotLink:
         if ok:
             return {"ok": True, "values": value}
         return {"ok": False, "error_code": "failed", "error": str(value)}
+
+
+async def _cancel_within(tasks: list, timeout: float) -> None:
+    for task in tasks:
+        task.cancel()
+    if tasks:
+        _, pending = await asyncio.wait(tasks, timeout=timeout)
+        if pending:
+            log.warning("%d robot link task(s) did not stop within %g s", len(pending), timeout)
 
 
 def _close_quietly(ros: roslibpy.Ros) -> None:

@@ -161,7 +161,7 @@ class LinkThread:
                 task.cancel()
             await self.link.stop()
 
-        asyncio.run_coroutine_threadsafe(_stop(), self.loop).result(10)
+        asyncio.run_coroutine_threadsafe(_stop(), self.loop).result(20)
         link_module.current = None
         self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(5)
