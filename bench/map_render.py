@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from robot.navigation.mapimage import render_map  # noqa: E402
 from robot.sim import world  # noqa: E402
-from tests.browser.conftest import CHROMIUM, CHROMIUM_ARGS, login  # noqa: E402
+from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, login  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 
 
