@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from asgiref.sync import async_to_sync
 from django.contrib import admin, messages
+from django.db import transaction
+from django.db.models import Max, Min
 from django.shortcuts import redirect
 from django.urls import path
 
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
+from history.storage import samples_deleted
 from robot.bus import RobotError, acall_service
 
 
@@ -72,3 +75,14 @@ class SampleAdmin(admin.ModelAdmin):
 
     def has_change_permission(self, request, obj=None) -> bool:
         return False
+
+    def delete_model(self, request, obj) -> None:
+        self.delete_queryset(request, Sample.objects.filter(pk=obj.pk))
+
+    def delete_queryset(self, request, queryset) -> None:
+        """Delete, then rebuild the rollups and forget the cached buckets the deleted samples were in."""
+        with transaction.atomic():
+            spans = list(queryset.order_by().values("topic").annotate(lo=Min("received_at"), hi=Max("received_at")))
+            queryset.delete()
+            for span in spans:
+                samples_deleted(topic=span["topic"], start=span["lo"].timestamp(), end=span["hi"].timestamp())

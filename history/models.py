@@ -70,18 +70,26 @@ class Sample(models.Model):
         return f"{self.topic} @ {self.received_at.isoformat()}"
 
 
-class SeriesBucket(models.Model):
-    """One settled min/max bucket of a field's series; buckets sit on a fixed grid per width."""
+class Aggregate(models.Model):
+    """Min, max, sum and count of one numeric field over a span, and the time of its first sample."""
 
     topic = models.CharField(max_length=255)
     field = models.CharField(max_length=255)
-    width_ms = models.BigIntegerField()
-    index = models.BigIntegerField()
     t_first = models.FloatField(null=True)
     vmin = models.FloatField(null=True)
     vmax = models.FloatField(null=True)
     vsum = models.FloatField(null=True)
     n = models.IntegerField(default=0)
+
+    class Meta:
+        abstract = True
+
+
+class SeriesBucket(Aggregate):
+    """One settled min/max bucket of a field's series; buckets sit on a fixed grid per width."""
+
+    width_ms = models.BigIntegerField()
+    index = models.BigIntegerField()
 
     class Meta:
         constraints = [
@@ -90,3 +98,18 @@ class SeriesBucket(models.Model):
 
     def __str__(self) -> str:
         return f"{self.topic} {self.field} [{self.width_ms} ms #{self.index}]"
+
+
+class Rollup(Aggregate):
+    """A numeric field over one second or minute (``slot`` = floor(epoch / level_s)), kept at write time."""
+
+    level_s = models.IntegerField()
+    slot = models.BigIntegerField()
+
+    class Meta:
+        constraints = [
+            models.UniqueConstraint(fields=["topic", "level_s", "field", "slot"], name="history_rollup_unique")
+        ]
+
+    def __str__(self) -> str:
+        return f"{self.topic} {self.field} [{self.level_s} s #{self.slot}]"

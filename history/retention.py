@@ -1,12 +1,14 @@
-"""Retention: delete samples older than each topic's maximum age."""
+"""Retention: delete samples older than each topic's maximum age (and their rollups)."""
 
 from __future__ import annotations
 
 import logging
 import time
 
+from django.db import transaction
+
 from history.models import Sample, TopicPolicy
-from history.storage import forget_buckets, utc
+from history.storage import samples_deleted, utc
 
 log = logging.getLogger(__name__)
 
@@ -17,9 +19,10 @@ def prune_expired(*, now: float | None = None) -> int:
     deleted = 0
     for topic, retention_s in TopicPolicy.objects.filter(retention_s__isnull=False).values_list("topic", "retention_s"):
         cutoff = now - retention_s
-        count, _ = Sample.objects.filter(topic=topic, received_at__lt=utc(cutoff)).delete()
-        if count:
-            forget_buckets(topic=topic, end_ms=cutoff * 1000)
-            log.info("history: pruned %d samples of %s older than %g s", count, topic, retention_s)
+        with transaction.atomic():
+            count, _ = Sample.objects.filter(topic=topic, received_at__lt=utc(cutoff)).delete()
+            if count:
+                samples_deleted(topic=topic, start=None, end=cutoff)
+                log.info("history: pruned %d samples of %s older than %g s", count, topic, retention_s)
         deleted += count
     return deleted

@@ -8,25 +8,14 @@ from datetime import datetime
 from typing import Any
 
 from history.models import Mode, Sample, TopicPolicy
+from history.rollup import numeric_leaves
 from history.storage import utc
 from robot import interface as ri
 
-MAX_ARRAY_FIELDS = 9  # small arrays (covariances aside) are worth plotting per element
 
-
-def numeric_fields(msg: Any, prefix: str = "") -> list[str]:
-    """Dotted paths of the numeric and boolean leaves of a message."""
-    if isinstance(msg, bool | int | float):
-        return [prefix] if prefix else []
-    items: list[tuple[str, Any]] = []
-    if isinstance(msg, dict):
-        items = list(msg.items())
-    elif isinstance(msg, list) and len(msg) <= MAX_ARRAY_FIELDS:
-        items = [(str(i), v) for i, v in enumerate(msg)]
-    paths: list[str] = []
-    for key, value in items:
-        paths.extend(numeric_fields(value, f"{prefix}.{key}" if prefix else key))
-    return paths
+def numeric_fields(msg: Any) -> list[str]:
+    """Dotted paths of the numeric and boolean leaves of a message (all of them, rolled up or not)."""
+    return [path for path, _ in numeric_leaves(msg)]
 
 
 def latest_sample(topic: str) -> Sample | None:

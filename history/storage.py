@@ -1,7 +1,9 @@
-"""Write recorded rows fast, and keep the downsampling cache honest about late rows.
+"""Write recorded rows fast with their rollups, and keep the downsampling cache honest about late rows.
 
 Plain ``bulk_create`` tops out near 10,000 rows/s; the recorder must sustain more, so rows
 (already JSON text) go in with one ``executemany`` on SQLite and ``COPY`` on PostgreSQL.
+The numeric rollups of the same rows (``history.rollup``) are merged in with one upsert
+per (topic, field, second or minute) in the same transaction, so they never disagree.
 """
 
 from __future__ import annotations
@@ -19,13 +21,15 @@ from typing import Any, TypeVar
 from django.db import close_old_connections, connection, transaction
 from django.db.models import BigIntegerField, ExpressionWrapper, F
 
-from history.models import Sample, SeriesBucket
+from history.models import Rollup, Sample, SeriesBucket
+from history.rollup import LEVELS_S, Aggregates, aggregate
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 
-# (topic, msg_type, receive time in epoch seconds, message as JSON text)
-Row = tuple[str, str, float, str]
+# (topic, msg_type, receive time in epoch seconds, message as JSON text[, the same message parsed])
+# The recorder passes the parsed message along so the rollups need no second parse.
+Row = tuple[str, str, float, str] | tuple[str, str, float, str, Any]
 # The same with the message still a dict.
 Pending = tuple[str, str, dict[str, Any], float]
 
@@ -83,7 +87,7 @@ def encode(pending: Sequence[Pending], limits: dict[str, int], *, default_max: i
             oversize += 1
             log.warning("history: not storing a %d-byte message on %s (limit %d bytes)", size, topic, limit)
             continue
-        rows.append((topic, msg_type, t, text))
+        rows.append((topic, msg_type, t, text, msg))
     return rows, oversize
 
 
@@ -94,19 +98,20 @@ def write_rows(rows: Sequence[Row]) -> int:
     with transaction.atomic():
         if connection.vendor == "postgresql":
             with connection.cursor() as cursor, cursor.copy(f"COPY {_TABLE} ({_COLUMNS}) FROM STDIN") as copy:
-                for topic, msg_type, t, text in rows:
-                    copy.write_row((topic, msg_type, utc(t), text))
+                for row in rows:
+                    copy.write_row((row[0], row[1], utc(row[2]), row[3]))
         elif connection.vendor == "sqlite":
             adapt = connection.ops.adapt_datetimefield_value
             with connection.cursor() as cursor:
                 cursor.executemany(
                     f"INSERT INTO {_TABLE} ({_COLUMNS}) VALUES (%s, %s, %s, %s)",
-                    [(topic, msg_type, adapt(utc(t)), text) for topic, msg_type, t, text in rows],
+                    [(row[0], row[1], adapt(utc(row[2])), row[3]) for row in rows],
                 )
         else:
             Sample.objects.bulk_create(
-                Sample(topic=tp, msg_type=mt, received_at=utc(t), data=json.loads(tx)) for tp, mt, t, tx in rows
+                Sample(topic=r[0], msg_type=r[1], received_at=utc(r[2]), data=json.loads(r[3])) for r in rows
             )
+        write_rollups(aggregate((r[0], r[2], r[4] if len(r) > 4 else json.loads(r[3])) for r in rows))
         _forget_late_buckets(rows)
     return len(rows)
 
@@ -114,7 +119,8 @@ def write_rows(rows: Sequence[Row]) -> int:
 def _forget_late_buckets(rows: Sequence[Row]) -> None:
     horizon = time.time() - SETTLE_S
     spans: dict[str, list[float]] = defaultdict(lambda: [float("inf"), float("-inf")])
-    for topic, _, t, _ in rows:
+    for row in rows:
+        topic, t = row[0], row[2]
         if t < horizon:
             span = spans[topic]
             span[0], span[1] = min(span[0], t), max(span[1], t)
@@ -134,3 +140,58 @@ def forget_buckets(*, topic: str, start_ms: float | None = None, end_ms: float |
     if end_ms is not None:
         buckets = buckets.filter(b_start__lte=math.ceil(end_ms))
     return buckets.delete()[0]
+
+
+_ROLLUP_COLUMNS = "topic, level_s, field, slot, t_first, vmin, vmax, vsum, n"
+_ROLLUP_TYPES = ("text", "integer", "text", "bigint", "float8", "float8", "float8", "float8", "integer")
+
+
+def _rollup_upsert(vendor: str) -> str:
+    table = Rollup._meta.db_table
+    if vendor == "postgresql":
+        # One statement for the whole batch: executemany costs a round trip per row.
+        arrays = ", ".join(f"%s::{kind}[]" for kind in _ROLLUP_TYPES)
+        rows, least, greatest = f"SELECT * FROM unnest({arrays})", "least", "greatest"
+    else:
+        rows, least, greatest = "VALUES (%s, %s, %s, %s, %s, %s, %s, %s, %s)", "min", "max"
+    return (
+        f"INSERT INTO {table} ({_ROLLUP_COLUMNS}) {rows}"
+        " ON CONFLICT (topic, level_s, field, slot) DO UPDATE SET"
+        f" t_first = {least}({table}.t_first, excluded.t_first), vmin = {least}({table}.vmin, excluded.vmin),"
+        f" vmax = {greatest}({table}.vmax, excluded.vmax), vsum = {table}.vsum + excluded.vsum,"
+        f" n = {table}.n + excluded.n"
+    )
+
+
+def write_rollups(aggregates: Aggregates) -> None:
+    """Merge rollups into the stored ones (inside the caller's transaction)."""
+    if not aggregates or connection.vendor not in ("postgresql", "sqlite"):
+        return  # elsewhere series come from the JSON alone
+    # In key order, so concurrent writers (Celery workers) lock rows in the same order: no deadlocks.
+    rows = [(*key, *aggregates[key]) for key in sorted(aggregates)]
+    with connection.cursor() as cursor:
+        if connection.vendor == "postgresql":
+            cursor.execute(_rollup_upsert("postgresql"), [list(column) for column in zip(*rows, strict=True)])
+        else:
+            cursor.executemany(_rollup_upsert("sqlite"), rows)
+
+
+def rebuild_rollups(*, topic: str, start: float | None, end: float) -> None:
+    """Recompute ``topic``'s rollup slots overlapping [start, end] from its samples (after deleting some)."""
+    for level in LEVELS_S:
+        hi = math.floor(end / level) + 1
+        rollups = Rollup.objects.filter(topic=topic, level_s=level, slot__lt=hi)
+        samples = Sample.objects.filter(topic=topic, received_at__lt=utc(hi * level))
+        if start is not None:
+            lo = math.floor(start / level)
+            rollups, samples = rollups.filter(slot__gte=lo), samples.filter(received_at__gte=utc(lo * level))
+        rollups.delete()
+        kept = samples.values_list("received_at", "data").iterator(chunk_size=2000)
+        write_rollups(aggregate(((topic, at.timestamp(), data) for at, data in kept), levels=(level,)))
+
+
+def samples_deleted(*, topic: str, start: float | None, end: float) -> None:
+    """Bring rollups and cached buckets in line after ``topic``'s samples in [start, end] were deleted."""
+    with transaction.atomic():
+        rebuild_rollups(topic=topic, start=start, end=end)
+        forget_buckets(topic=topic, start_ms=None if start is None else start * 1000, end_ms=end * 1000)

@@ -31,7 +31,8 @@ def celery_writer_for(app: Celery | None = None) -> Callable[[Sequence[Row]], in
     """A recorder writer that queues each batch for a worker instead of writing it here."""
 
     def write(rows: Sequence[Row]) -> int:
-        (app or write_batch.app).send_task(write_batch.name, args=[[list(r) for r in rows]])
+        # The JSON text only (not the parsed message the recorder passes along): the worker parses it.
+        (app or write_batch.app).send_task(write_batch.name, args=[[list(r[:4]) for r in rows]])
         return len(rows)
 
     return write
