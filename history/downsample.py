@@ -1,9 +1,13 @@
 """Downsampled series of one numeric field: min/max buckets computed in the database.
 
 Buckets sit on a fixed grid (width from a ladder of round values, index = floor(epoch /
-width)), so a bucket that can no longer change is cached in ``SeriesBucket`` and later
-requests only scan the open tail. Each bucket keeps its minimum and maximum, so spikes
-survive however far the series is zoomed out.
+width)), Each bucket keeps its minimum and maximum, so spikes survive however far the series is
+zoomed out.
+
+Buckets of a second or wider are summed from the rollups written with the rows (one row per
+field and minute, or second), so no JSON is read. Narrower buckets, and fields the rollups
+leave out, come from the stored JSON; there a bucket that can no longer change is cached in
+``SeriesBucket`` and later requests only scan the open tail.
 """
 
 from __future__ import annotations
@@ -16,7 +20,8 @@ from datetime import datetime
 
 from django.db import connection
 
-from history.models import Sample, SeriesBucket
+from history.models import Rollup, Sample, SeriesBucket
+from history.rollup import level_for
 from history.storage import SETTLE_S, utc
 
 _MS = 1, 2, 5, 10, 20, 50, 100, 200, 500
@@ -25,6 +30,11 @@ WIDTHS_MS: tuple[int, ...] = (*_MS, *(s * 1000 for s in _S), 2592000000)
 
 _SEGMENT = re.compile(r"^(?:[A-Za-z_][A-Za-z0-9_]*|\d+)$")
 _TABLE = Sample._meta.db_table
+_ROLLUPS = (
+    "SELECT (slot * %s) / %s AS b, min(t_first), min(vmin), max(vmax), sum(vsum), sum(n)"
+    f" FROM {Rollup._meta.db_table} WHERE topic = %s AND level_s = %s AND field = %s AND slot >= %s AND slot < %s"
+    " GROUP BY 1"
+)
 
 
 class BadField(ValueError):
@@ -70,7 +80,8 @@ def _sql(segments: list[str]) -> tuple[str, list]:
             " CASE jsonb_typeof(d) WHEN 'number' THEN d::float8"
             " WHEN 'boolean' THEN CASE WHEN d = 'true'::jsonb THEN 1.0 ELSE 0.0 END END AS v"
             " FROM (SELECT extract(epoch FROM received_at)::float8 AS t, data #> %s AS d"
-            f" FROM {_TABLE} WHERE topic = %s AND received_at >= %s AND received_at < %s) z) x GROUP BY b",
+            f" FROM {_TABLE} WHERE topic = %s AND received_at >= %s AND received_at < %s) z) x"
+            " WHERE v IS NOT NULL GROUP BY b",
             [segments],
         )
     if connection.vendor == "sqlite":
@@ -108,13 +119,20 @@ def _runs(indexes: list[int], *, max_runs: int = 8) -> list[tuple[int, int]]:
     return runs
 
 
-def series(*, topic: str, field: str, start: datetime, end: datetime, max_points: int,
-           now: float | None = None) -> Series:
-    """At most ``max_points`` buckets of ``field`` between start and end (bucket edges on the grid)."""
+def _from_rollups(topic: str, field: str, level: int, width: int, b0: int, b1: int) -> dict[int, Agg] | None:
+    """Buckets b0..b1 summed from the rollups; None when ``field`` is not rolled up (read the JSON instead)."""
+    if not Rollup.objects.filter(topic=topic, level_s=level, field=field).exists():
+        return None
+    per_slot = level * 1000
+    with connection.cursor() as cursor:
+        cursor.execute(_ROLLUPS, [per_slot, width, topic, level, field, b0 * width // per_slot,
+                                  (b1 + 1) * width // per_slot])
+        return {int(b): (t, vmin, vmax, vsum, int(n)) for b, t, vmin, vmax, vsum, n in cursor.fetchall()}
+
+
+def _from_samples(topic: str, field: str, width: int, b0: int, b1: int, now: float | None) -> dict[int, Agg]:
+    """Buckets b0..b1 from the JSON: the cached settled ones, the rest scanned (and cached once settled)."""
     segments = parse_field(field)
-    t0, t1 = start.timestamp(), end.timestamp()
-    width = bucket_width_ms(max(t1 - t0, 0.001), max_points)
-    b0, b1 = math.floor(t0 * 1000 / width), math.floor(max(t1 * 1000 - 1, t0 * 1000) / width)
     settled = math.floor(((now or time.time()) - SETTLE_S) * 1000 / width) - 1
     cached: dict[int, Agg] = {
         r.index: (r.t_first, r.vmin, r.vmax, r.vsum, r.n)
@@ -133,9 +151,23 @@ def series(*, topic: str, field: str, start: datetime, end: datetime, max_points
         for a in [fresh.get(i, (None, None, None, None, 0))]
     ]
     SeriesBucket.objects.bulk_create(to_cache, ignore_conflicts=True, batch_size=500)
+    return cached | fresh
+
+
+def series(*, topic: str, field: str, start: datetime, end: datetime, max_points: int,
+           now: float | None = None) -> Series:
+    """At most ``max_points`` buckets of ``field`` between start and end (bucket edges on the grid)."""
+    parse_field(field)
+    t0, t1 = start.timestamp(), end.timestamp()
+    width = bucket_width_ms(max(t1 - t0, 0.001), max_points)
+    b0, b1 = math.floor(t0 * 1000 / width), math.floor(max(t1 * 1000 - 1, t0 * 1000) / width)
+    level = level_for(width)
+    buckets = _from_rollups(topic, field, level, width, b0, b1) if level else None
+    if buckets is None:
+        buckets = _from_samples(topic, field, width, b0, b1, now)
     out = Series(topic=topic, field=field, bucket_s=width / 1000)
     for i in range(b0, b1 + 1):
-        agg = cached.get(i) or fresh.get(i)
+        agg = buckets.get(i)
         if agg is None or not agg[4]:
             continue
         t, vmin, vmax, vsum, n = agg
