@@ -140,3 +140,26 @@ def test_it_picks_a_bucket_width_that_fits_the_point_budget():
     assert bucket_width_ms(86400, 2000) == 60_000
     assert bucket_width_ms(1, 2000) == 1
     assert 86400 * 7 * 1000 / bucket_width_ms(86400 * 7, 2000) <= 2000
+
+
+def test_it_backfills_the_rollups_of_samples_stored_before_they_existed(db, monkeypatch):
+    from importlib import import_module
+
+    from django.apps import apps
+
+    migration = import_module("history.migrations.0002_rollup")
+    monkeypatch.setattr(migration, "BACKFILL_CHUNK", 7)  # many batches, each cut between minutes
+    t0 = time.time() - 7200
+    _write([(t0 + i * 3.3, float(i % 17)) for i in range(600)])
+    _write([(t0 + i, float(i)) for i in range(30)], topic="/other")
+    columns = ("topic", "level_s", "field", "slot", "t_first", "vmin", "vmax", "vsum", "n")
+    written = sorted(Rollup.objects.values_list(*columns))
+    Rollup.objects.all().delete()
+
+    migration.backfill(apps, None)
+
+    backfilled = sorted(Rollup.objects.values_list(*columns))
+    assert len(backfilled) == len(written) > 600
+    for got, want in zip(backfilled, written, strict=True):
+        assert got[:4] == want[:4] and got[8] == want[8]
+        assert got[4:8] == pytest.approx(want[4:8], abs=1e-3)  # stored times are whole microseconds
