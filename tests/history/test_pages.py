@@ -99,3 +99,10 @@ def test_it_serves_the_timeline(viewer_api):
 
     assert res.status_code == 200
     assert res.json()["totals"] == pytest.approx({"suspension": 10, "idle": 10})
+
+
+def test_it_explains_an_empty_history(client, viewer):
+    client.force_login(viewer)
+    body = client.get("/history/").content.decode()
+    assert 'id="history-empty"' in body
+    assert "recording policies</a>" not in body.split('id="history-empty"')[1].split("</p>")[0]

@@ -1,0 +1,33 @@
+"""What a fresh installation records, so the ready-made plots have data from the first day."""
+
+from __future__ import annotations
+
+from history.models import Mode, TopicPolicy
+from robot import interface as ri
+
+DAY_S = 24 * 3600.0
+
+# key -> (mode, interval_s or None for the global default, retention_s)
+DEFAULT_POLICIES: dict[str, tuple[str, float | None, float]] = {
+    "battery_soc": (Mode.PERIODIC, 10.0, 30 * DAY_S),
+    "battery_voltage": (Mode.PERIODIC, 10.0, 30 * DAY_S),
+    "emotional_state": (Mode.PERIODIC, 2.0, 30 * DAY_S),
+    "robot_pose": (Mode.PERIODIC, 5.0, 7 * DAY_S),
+    "state_change": (Mode.EVERY, None, 90 * DAY_S),
+    "robot_mode": (Mode.EVERY, None, 90 * DAY_S),
+    "text_to_speech": (Mode.EVERY, None, 30 * DAY_S),
+    "rosout": (Mode.EVERY, None, 7 * DAY_S),
+}
+
+
+def ensure_default_policies() -> int:
+    """Create the default policies that don't exist yet (never overrides an admin's choice)."""
+    created = 0
+    for key, (mode, interval_s, retention_s) in DEFAULT_POLICIES.items():
+        topic = ri.topic(key)
+        _, made = TopicPolicy.objects.get_or_create(
+            topic=topic.name,
+            defaults={"msg_type": topic.type, "mode": mode, "interval_s": interval_s, "retention_s": retention_s},
+        )
+        created += made
+    return created
