@@ -8,6 +8,7 @@ django_asgi_app = get_asgi_application()
 from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from channels.security.websocket import AllowedHostsOriginValidator  # noqa: E402
+from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.hosting import autostart_in_daphne  # noqa: E402
@@ -18,5 +19,9 @@ application = ProtocolTypeRouter(
         "websocket": AllowedHostsOriginValidator(AuthMiddlewareStack(URLRouter(websocket_urlpatterns))),
     }
 )
+
+# Same autobahn ordering issue as the robot link (robot/link.py): without a class default,
+# browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
+WebSocketProtocol.tcpNoDelay = True
 
 autostart_in_daphne()

@@ -28,6 +28,15 @@ class TeleopConsumer(AsyncJsonWebsocketConsumer):
         await self.accept()
         await self.driver.start()
 
+    async def dispatch(self, message: dict[str, Any]) -> None:
+        # Channels hops to its one sync thread (close_old_connections) before every handler;
+        # stick input must not queue behind other database work there. The paths that do
+        # touch the database (lock audit) use database_sync_to_async themselves.
+        if message["type"] in ("websocket.receive", "teleop.lock"):
+            await getattr(self, message["type"].replace(".", "_"))(message)
+        else:
+            await super().dispatch(message)
+
     async def disconnect(self, code: int) -> None:
         if self.driver is None:
             return

@@ -15,6 +15,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
 import roslibpy
+from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 
 from robot import interface as ri
 from robot.fanout import Coalescer
@@ -31,6 +32,11 @@ from robot.groups import (
 from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
 
 log = logging.getLogger(__name__)
+
+# autobahn applies ``tcpNoDelay`` in connectionMade *before* copying the factory's options onto
+# the protocol, so the instance value is still unset there and Nagle stays on: small frames
+# then wait ~30-40 ms for the robot's delayed ACK. A class default is read in time.
+AutobahnRosBridgeProtocol.tcpNoDelay = True
 
 # (topic name, type, message, receive time) for every message on every subscribed topic.
 Listener = Callable[[str, str, dict[str, Any], float], None]

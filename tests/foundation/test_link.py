@@ -142,3 +142,11 @@ async def test_it_replays_recent_log_lines_to_a_page_opened_later(link, sim, vie
         seen.append(frame["msg"]["msg"])
     assert [m for m in seen if m.startswith("boom")] == ["boom 0", "boom 1", "boom 2"]
     await communicator.disconnect()
+
+
+async def test_it_turns_nagle_off_on_the_rosbridge_socket(link):
+    import socket
+
+    handle = link.ros.factory._proto.transport.getHandle()
+    # With Nagle on, small command frames wait ~30-40 ms for the robot's delayed ACK.
+    assert handle.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
