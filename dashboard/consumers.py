@@ -8,6 +8,7 @@ from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
+from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.live import SERVER_KEYS, live_frame, status_frame, watchable_keys
 from robot import interface as ri
 from robot.bus import RobotError, arequest
@@ -17,7 +18,9 @@ from robot.state import STATUS_KEY, get_store
 UNAUTHENTICATED = 4401
 
 
-class LiveConsumer(AsyncJsonWebsocketConsumer):
+class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
+    db_free_types = frozenset({"robot.update", "robot.status"})
+
     async def connect(self) -> None:
         user = self.scope.get("user")
         if user is None or not user.is_authenticated:
@@ -83,17 +86,6 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             await self.send_json({"kind": "notice", "message": "Reconnecting to the robot…"})
         except RobotError as exc:
             await self.send_json({"kind": "error", "message": exc.message})
-
-    async def dispatch(self, message: dict[str, Any]) -> None:
-        # Channels runs close_old_connections on its one sync thread before every handler.
-        # Link fan-out never touches the database, and with 50 watchers of a 10 Hz topic those
-        # serialised thread hops were most of the publish-to-browser time (bench/live_latency.py).
-        if message["type"] == "robot.update":
-            await self.robot_update(message)
-        elif message["type"] == "robot.status":
-            await self.robot_status(message)
-        else:
-            await super().dispatch(message)
 
     async def robot_update(self, event: dict[str, Any]) -> None:
         await self.send_json(live_frame(event))

@@ -10,11 +10,14 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
+from dashboard.fastdispatch import NoDatabaseHopMixin
 from robot.teleop.driver import Driver
 from robot.teleop.driving import LOCK_GROUP, LockEvent
 
 
-class TeleopConsumer(AsyncJsonWebsocketConsumer):
+class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
+    # Stick input must not queue behind other database work; lock audits hop themselves.
+    db_free_types = frozenset({"websocket.receive", "teleop.lock"})
     driver: Driver | None = None
 
     async def connect(self) -> None:
@@ -27,15 +30,6 @@ class TeleopConsumer(AsyncJsonWebsocketConsumer):
         await self.channel_layer.group_add(LOCK_GROUP, self.channel_name)
         await self.accept()
         await self.driver.start()
-
-    async def dispatch(self, message: dict[str, Any]) -> None:
-        # Channels hops to its one sync thread (close_old_connections) before every handler;
-        # stick input must not queue behind other database work there. The paths that do
-        # touch the database (lock audit) use database_sync_to_async themselves.
-        if message["type"] in ("websocket.receive", "teleop.lock"):
-            await getattr(self, message["type"].replace(".", "_"))(message)
-        else:
-            await super().dispatch(message)
 
     async def disconnect(self, code: int) -> None:
         if self.driver is None:

@@ -154,11 +154,12 @@ class RobotLink:
         self._subscriptions[name] = topic
 
     def unsubscribe(self, name: str) -> None:
+        """Drop an extra subscription; monitored topics stay subscribed."""
+        if any(t.name == name for t in self.topics):
+            return
         topic = self._subscriptions.pop(name, None)
-        if topic is not None and not any(t.name == name for t in self.topics):
+        if topic is not None:
             topic.unsubscribe()
-        elif topic is not None:
-            self._subscriptions[name] = topic  # monitored topics stay
 
     @property
     def subscribed(self) -> set[str]:
