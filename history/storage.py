@@ -23,6 +23,7 @@ from django.db.models import BigIntegerField, ExpressionWrapper, F
 
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
+from robot.wire import jsonable
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -80,7 +81,7 @@ def encode(pending: Sequence[Pending], limits: dict[str, int], *, default_max: i
     rows: list[Row] = []
     oversize = 0
     for topic, msg_type, msg, t in pending:
-        text = json.dumps(msg, separators=(",", ":"), ensure_ascii=False)
+        text = json.dumps(msg, separators=(",", ":"), ensure_ascii=False, default=jsonable)
         limit = limits.get(topic, default_max)
         size = len(text.encode()) if len(text) * 4 > limit else len(text)
         if size > limit:

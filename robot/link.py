@@ -15,7 +15,6 @@ from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
 import roslibpy
-from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 
 from robot import interface as ri
 from robot.fanout import Coalescer
@@ -29,14 +28,10 @@ from robot.groups import (
     TopicUpdate,
     topic_group,
 )
+from robot.rosclient import LinkRos
 from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
 
 log = logging.getLogger(__name__)
-
-# autobahn applies ``tcpNoDelay`` in connectionMade *before* copying the factory's options onto
-# the protocol, so the instance value is still unset there and Nagle stays on: small frames
-# then wait ~30-40 ms for the robot's delayed ACK. A class default is read in time.
-AutobahnRosBridgeProtocol.tcpNoDelay = True
 
 # (topic name, type, message, receive time) for every message on every subscribed topic.
 Listener = Callable[[str, str, dict[str, Any], float], None]
@@ -44,11 +39,23 @@ Listener = Callable[[str, str, dict[str, Any], float], None]
 Handler = Callable[[ri.Topic, dict[str, Any], float], Awaitable[None] | None]
 
 _handlers: dict[str, Handler] = {}
+_array_keys: set[str] = set()
 
 
-def register_handler(key: str, handler: Handler) -> None:
-    """Route ``key``'s messages to ``handler`` instead of the store and browsers (apps call this in ready())."""
+def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> None:
+    """Route ``key``'s messages to ``handler`` instead of the store and browsers (apps call this in ready()).
+
+    With ``arrays`` a large message's trailing integer array (a map's ``data``) arrives as a numpy array.
+    """
     _handlers[key] = handler
+    if arrays:
+        _array_keys.add(key)
+    else:
+        _array_keys.discard(key)
+
+
+def array_topics() -> frozenset[str]:
+    return frozenset(ri.topic(key).name for key in _array_keys)
 
 
 class RobotLink:
@@ -89,7 +96,7 @@ class RobotLink:
 
         self.loop = asyncio.get_running_loop()
         self._coalescer = Coalescer(self._send_update, loop=self.loop)
-        self.ros = roslibpy.Ros(self.url)  # connects (and later reconnects) by itself
+        self.ros = LinkRos(self.url, array_topics=array_topics())  # connects (and later reconnects) by itself
         self.ros.factory.maxDelay = self.max_backoff_s
         self.ros.factory.initialDelay = 0.5
         self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready))

@@ -14,6 +14,8 @@ from typing import Any, Protocol
 
 from django.conf import settings
 
+from robot.wire import jsonable
+
 STATUS_KEY = "_link"
 
 
@@ -81,10 +83,10 @@ class RedisStore:
         return client
 
     async def aput(self, key: str, entry: dict[str, Any]) -> None:
-        await self._aclient().hset(self._name, key, json.dumps(entry))
+        await self._aclient().hset(self._name, key, json.dumps(entry, default=jsonable))
 
     def put(self, key: str, entry: dict[str, Any]) -> None:
-        self._sync.hset(self._name, key, json.dumps(entry))
+        self._sync.hset(self._name, key, json.dumps(entry, default=jsonable))
 
     async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]:
         if not keys:
@@ -98,7 +100,7 @@ class RedisStore:
     async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None:
         name = f"{self._name}:recent:{key}"
         async with self._aclient().pipeline(transaction=False) as pipe:
-            await pipe.rpush(name, json.dumps(entry)).ltrim(name, -maxlen, -1).execute()
+            await pipe.rpush(name, json.dumps(entry, default=jsonable)).ltrim(name, -maxlen, -1).execute()
 
     async def aget_recent(self, key: str) -> list[dict[str, Any]]:
         return [json.loads(v) for v in await self._aclient().lrange(f"{self._name}:recent:{key}", 0, -1)]

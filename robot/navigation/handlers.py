@@ -64,7 +64,7 @@ async def _render_and_publish(msg: dict[str, Any], t: float, seq: int) -> None:
     await apublish_state(MAP_META_KEY, map_meta(rendered, msg, t), t)
 
 
-link_module.register_handler("map", on_map)
+link_module.register_handler("map", on_map, arrays=True)
 
 
 # --- goal statuses ---------------------------------------------------------------------------

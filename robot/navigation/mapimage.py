@@ -59,12 +59,20 @@ class RenderedMap:
 def grid_array(msg: dict[str, Any]) -> tuple[MapGeometry, np.ndarray]:
     """The grid as an int8 array of shape (height, width), row 0 at the map origin."""
     geometry = MapGeometry.from_info(msg["info"])
-    data = msg.get("data") or []
+    data = msg.get("data")
+    if data is None:
+        data = []
     n = geometry.width * geometry.height
     if n <= 0 or len(data) != n or geometry.resolution <= 0:
         raise MapError(f"map of {geometry.width}x{geometry.height} cells came with {len(data)} values")
-    arr = np.fromiter(data, dtype=np.int8, count=n)
-    return geometry, arr.reshape(geometry.height, geometry.width)
+    # A large map's data is already an ndarray (robot.wire); a small one is a list.
+    try:
+        values = data if isinstance(data, np.ndarray) else np.array(data, dtype=np.int32)
+    except (OverflowError, TypeError, ValueError) as exc:
+        raise MapError(f"map cells must be integers: {exc}") from None
+    if values.min() < UNKNOWN or values.max() > 100:
+        raise MapError(f"map cells must be {UNKNOWN}..100, not {values.min()}..{values.max()}")
+    return geometry, values.astype(np.int8).reshape(geometry.height, geometry.width)
 
 
 def map_version(geometry: MapGeometry, grid: np.ndarray) -> str:

@@ -1,0 +1,80 @@
+"""roslibpy, with large frames decoded on a worker thread instead of the reactor's.
+
+roslibpy decodes every frame with ``json.loads`` where it arrives: on the reactor thread,
+which inside Daphne is the web server's event loop. A 4000 x 4000 map would stall every
+page and websocket for most of a second. ``LinkRos`` is ``roslibpy.Ros`` with a protocol
+that sends frames of ``LARGE_FRAME_BYTES`` and more to one decoding thread (so they stay
+in order) and hands the decoded message back to roslibpy's own dispatch on the reactor.
+It also turns Nagle off on the rosbridge socket (see ``tcpNoDelay``).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import roslibpy
+from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
+from roslibpy.core import Message
+
+from robot.wire import LARGE_FRAME_BYTES, decode_frame
+
+log = logging.getLogger(__name__)
+
+_decoder = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rosbridge-decode")
+
+
+class LinkProtocol(AutobahnRosBridgeProtocol):
+    # autobahn applies ``tcpNoDelay`` in connectionMade *before* copying the factory's options
+    # onto the protocol, so the instance value is still unset there and Nagle stays on: small
+    # frames then wait ~30-40 ms for the robot's delayed ACK. A class default is read in time.
+    tcpNoDelay = True
+    _began = 0.0
+
+    def onMessageBegin(self, isBinary: bool) -> None:
+        self._began = time.perf_counter()
+        super().onMessageBegin(isBinary)
+
+    def on_message(self, payload: bytes) -> None:
+        if len(payload) < LARGE_FRAME_BYTES:
+            super().on_message(payload)
+        else:
+            log.info("received a %.1f MB frame in %.0f ms; decoding it off the event loop",
+                     len(payload) / 1e6, (time.perf_counter() - self._began) * 1000)
+            _decoder.submit(self._decode_large, payload, getattr(self.factory, "array_topics", frozenset()))
+
+    def _decode_large(self, payload: bytes, array_topics: frozenset[str]) -> None:
+        try:
+            message = Message(decode_frame(payload, array_topics=array_topics))
+        except ValueError:
+            log.exception("dropped an undecodable %d-byte frame from rosbridge", len(payload))
+            return
+        from twisted.internet import reactor  # imported late: Daphne installs its own reactor first
+
+        reactor.callFromThread(self._dispatch, message)
+
+    def _dispatch(self, message: dict[str, Any]) -> None:
+        handler = self._message_handlers.get(message.get("op"))
+        if handler is None:
+            log.warning("no handler for rosbridge operation %r", message.get("op"))
+            return
+        try:
+            handler(message)
+        except Exception:
+            log.exception("handling a large %r frame failed", message.get("op"))
+
+
+class LinkRos(roslibpy.Ros):
+    """``roslibpy.Ros`` whose connections use ``LinkProtocol``; ``array_topics`` get numpy arrays."""
+
+    def __init__(self, url: str, *, array_topics: frozenset[str] = frozenset()) -> None:
+        self._array_topics = array_topics
+        super().__init__(url, transport="twisted")
+
+    def connect(self) -> None:
+        # Ros.__init__ connects at once: set the protocol before the first connection is built.
+        self.factory.protocol = LinkProtocol
+        self.factory.array_topics = self._array_topics
+        super().connect()
