@@ -9,6 +9,9 @@ class RobotConfig(AppConfig):
     def ready(self) -> None:
         checks.register(check_robot_settings)
         import robot.navigation.handlers  # noqa: F401  (map renderer + goal tracker wherever the link runs)
+        from robot.navigation import broadcast
+
+        broadcast.connect()
 
 
 def check_robot_settings(app_configs, **kwargs):

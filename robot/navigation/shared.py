@@ -20,7 +20,8 @@ from robot.state import get_store
 MAP_META_KEY = "map_meta"
 GOAL_KEY = "nav_goal"
 GOAL_STATUS_KEY = "nav_goal_status"
-SERVER_KEYS = (MAP_META_KEY, GOAL_KEY, GOAL_STATUS_KEY)
+LOCATIONS_KEY = "nav_locations"  # sent on change only (robot.navigation.broadcast)
+SERVER_KEYS = (MAP_META_KEY, GOAL_KEY, GOAL_STATUS_KEY, LOCATIONS_KEY)
 
 
 def map_dir() -> Path:

@@ -53,7 +53,7 @@ export function formatAge(seconds) {
   return `${Math.round(seconds / 3600)} h ago`;
 }
 
-export function connectLive({ keys = [], onUpdate = () => {}, onStatus = () => {}, onMessage = () => {} } = {}) {
+export function connectLive({ keys = [], onUpdate = () => {}, onStatus = () => {}, onMessage = () => {}, onOpen = () => {} } = {}) {
   let ws = null;
   let delay = 500;
   let closedByUs = false;
@@ -81,6 +81,7 @@ export function connectLive({ keys = [], onUpdate = () => {}, onStatus = () => {
       document.body.classList.remove("socket-down");
       if (watching.size) ws.send(JSON.stringify({ action: "watch", keys: [...watching] }));
       while (queue.length) ws.send(JSON.stringify(queue.shift()));
+      onOpen();
     };
     ws.onmessage = (ev) => {
       const frame = JSON.parse(ev.data);

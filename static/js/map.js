@@ -102,6 +102,7 @@ const onUpdate = {
   map_meta(m) { showMap(m); },
   nav_goal(m) { state.goal = m; renderGoal(); },
   nav_goal_status(m) { state.statuses = m; renderGoal(); },
+  nav_locations(m) { state.locations = m.locations; renderLocations(); },
 };
 
 function renderGoal() {
@@ -268,4 +269,10 @@ renderLocations();
 renderGoal();
 new ResizeObserver(resize).observe(root);
 showMap(config.map);
-connectLive({ keys: config.keys, onUpdate: (f) => { onUpdate[f.key]?.(f.msg); scheduleDraw(); } });
+let opened = false;
+connectLive({
+  keys: config.keys,
+  onUpdate: (f) => { onUpdate[f.key]?.(f.msg); scheduleDraw(); },
+  // Changes are only sent while connected: after a reconnect, fetch what may have been missed.
+  onOpen: () => { if (opened) reloadLocations().catch(() => {}); opened = true; },
+});

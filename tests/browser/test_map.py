@@ -93,3 +93,21 @@ def test_it_fits_a_phone_and_zooms_with_a_pinch(browser, stack):
         assert math.dist(page.evaluate("() => window.cyborgMap.toClient(0, 0)"), (cx, cy)) < 2
     finally:
         context.close()
+
+
+def test_a_location_saved_on_one_page_appears_on_every_other_at_once(browser, page, stack):
+    watcher_context = browser.new_context(viewport={"width": 1280, "height": 900})
+    watcher = watcher_context.new_page()
+    try:
+        open_map(watcher, stack, "vera")
+        open_map(page, stack, "otto")
+        page.fill("#save-pose-name", "browser-porch")
+        page.click("#save-pose-form button[type=submit]")
+        # No reload on the watcher's side: the change arrives on its live socket.
+        expect(watcher.locator('#location-list li[data-location="browser-porch"]')).to_be_visible()
+        expect(watcher.locator("#send-to option", has_text="browser-porch")).to_have_count(1)
+        page.once("dialog", lambda dialog: dialog.accept())
+        page.click('#location-list li[data-location="browser-porch"] button[aria-label="Delete browser-porch"]')
+        expect(watcher.locator('#location-list li[data-location="browser-porch"]')).to_have_count(0)
+    finally:
+        watcher_context.close()

@@ -1,12 +1,14 @@
-"""Everyone watching the map sees the same map version, goal and goal status."""
+"""Everyone watching the map sees the same map version, goal, goal status and named locations."""
 
 import asyncio
 
 import pytest
+from asgiref.sync import sync_to_async
 
+from robot.models import Location
 from robot.navigation.goals import agoal_send
 from robot.navigation.handlers import track_goal_statuses
-from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY
+from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, LOCATIONS_KEY, MAP_META_KEY
 from robot.state import get_store
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
@@ -42,5 +44,34 @@ async def test_it_shows_every_watcher_the_same_goal_and_its_status(link, operato
             assert status["msg"]["goals"][goal["id"]]["state"] in ("active", "succeeded")
     finally:
         tracker.cancel()
+        for ws in watchers:
+            await ws.disconnect()
+
+
+async def test_it_tells_every_watcher_when_locations_change(operator_api, operator, viewer):
+    watchers = [await watching(u, [LOCATIONS_KEY]) for u in (viewer, operator)]
+    for ws in watchers:  # frames are handled in order: once this is refused, the watch above is in force
+        await ws.send_json_to({"action": "watch", "keys": ["no-such-key"]})
+        await receive_until(ws, lambda f: f["kind"] == "error")
+
+    def names(frame):
+        return [loc["name"] for loc in frame["msg"]["locations"]]
+
+    try:
+        res = await sync_to_async(operator_api.post)(
+            "/api/locations/", {"name": "lab", "x": 1.5, "y": -2.0, "yaw": 0.5}, format="json")
+        assert res.status_code == 201
+        for ws in watchers:
+            frame = await receive_until(ws, is_update(LOCATIONS_KEY))
+            assert frame["msg"]["locations"] == [{"name": "lab", "map_name": "", "x": 1.5, "y": -2.0, "yaw": 0.5,
+                                                 "threshold": 0.5, "description": ""}]
+        # The admin and the shell save models directly: the same signal tells the pages.
+        await sync_to_async(Location.objects.create)(name="cafe", x=3.0, y=1.0)
+        for ws in watchers:
+            assert names(await receive_until(ws, is_update(LOCATIONS_KEY))) == ["cafe", "lab"]
+        assert (await sync_to_async(operator_api.delete)("/api/locations/lab/")).status_code == 204
+        for ws in watchers:
+            assert names(await receive_until(ws, is_update(LOCATIONS_KEY))) == ["cafe"]
+    finally:
         for ws in watchers:
             await ws.disconnect()

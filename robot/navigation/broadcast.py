@@ -1,0 +1,38 @@
+"""Tell every open map page when the named locations change (API, admin or shell).
+
+The list is only sent, never stored as latest state: a page gets the current list with the
+page itself (and again whenever its socket reconnects), so a stored copy could only ever be
+older than what the page already has.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from asgiref.sync import async_to_sync
+from channels.layers import get_channel_layer
+from django.db import transaction
+from django.db.models.signals import post_delete, post_save
+
+from robot.groups import TopicUpdate, topic_group
+from robot.models import Location
+from robot.navigation.selectors import location_list
+from robot.navigation.shared import LOCATIONS_KEY
+
+
+def broadcast_locations() -> None:
+    update: TopicUpdate = {
+        "type": "robot.update", "key": LOCATIONS_KEY, "topic": "", "msg_type": "",
+        "msg": {"locations": location_list()}, "t": time.time(),
+    }
+    async_to_sync(get_channel_layer().group_send)(topic_group(LOCATIONS_KEY), update)
+
+
+def _changed(sender: type[Location], **kwargs: Any) -> None:
+    transaction.on_commit(broadcast_locations)  # after the change is visible to everyone
+
+
+def connect() -> None:
+    post_save.connect(_changed, sender=Location, dispatch_uid="robot.navigation.locations-changed")
+    post_delete.connect(_changed, sender=Location, dispatch_uid="robot.navigation.locations-deleted")
