@@ -50,21 +50,33 @@ def test_it_leaves_anything_but_a_plain_integer_list_to_json(body):
     assert parse_int_array(body.encode()) is None
 
 
+def test_it_copes_with_the_robots_ujson_frames_keys_in_any_order_and_escaped_slashes():
+    # rosbridge with ujson on Python 2: compact, "\/" for "/", keys in hash order.
+    frame = (b'{"topic":"\\/map","msg":{"info":{"width":3},"data":[0,-1,100],"header":{"frame_id":"map"}},'
+             b'"op":"publish"}')
+    decoded = decode_frame(frame, array_topics=ARRAYS)
+    assert decoded["topic"] == MAP
+    assert isinstance(decoded["msg"]["data"], np.ndarray)
+    assert same(decoded, json.loads(frame))
+
+
 @pytest.mark.parametrize("frame", [
     b'{"op":"publish","topic":"/map","msg":{"data":[1.5,2.5]}}',  # floats
-    b'{"op":"publish","topic":"/map","msg":{"data":[1,2],"info":{"width":2}}}',  # data not last
     b'{"op":"publish","topic":"/map","msg":{"data":[[1],[2]]}}',  # nested
-    b'{"op":"publish","topic":"/map","msg":{"frame_id":"a[1,2]"}}',  # a bracket in a string
-    b'{"op":"publish","topic":"/map","msg":{"frame_id":"x\\":[1,2]"}}',  # an escaped quote and colon before it
+    b'{"op":"publish","topic":"/map","msg":{"frame_id":"a\\"data\\":[1,2]"}}',  # inside a string
+    b'{"op":"publish","topic":"/map","msg":{"data":"[1,2]"}}',  # a string
     b'{"op":"publish","topic":"/map","msg":{"data":[]}}',
+    b'{"op":"publish","topic":"/map","msg":{"data":[1,2],"data2":{"data":[3,4,5]}}}',  # two: the longer is cut
+    b'{"op":"publish","topic":"/map","msg":{"x\\\\":0,"data":[1,2]}}',  # an escaped backslash before a key
 ])
 def test_frames_of_other_shapes_decode_exactly_as_json_does(frame):
     assert same(decode_frame(frame, array_topics=ARRAYS), json.loads(frame))
 
 
-def test_other_topics_keep_plain_lists():
-    frame = grid_frame([1, 2, 3], topic="/move_base/global_costmap/costmap")
-    assert decode_frame(frame, array_topics=ARRAYS)["msg"]["data"] == [1, 2, 3]
+def test_other_topics_get_plain_lists_from_the_fast_path_too():
+    frame = grid_frame([1, 2, 3] * 10, topic="/move_base/global_costmap/costmap")
+    decoded = decode_frame(frame, array_topics=ARRAYS)
+    assert type(decoded["msg"]["data"]) is list and decoded["msg"]["data"] == [1, 2, 3] * 10
 
 
 def test_a_broken_frame_is_an_error_not_a_partial_message():
