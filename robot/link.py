@@ -45,7 +45,7 @@ _array_keys: set[str] = set()
 def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> None:
     """Route ``key``'s messages to ``handler`` instead of the store and browsers (apps call this in ready()).
 
-    With ``arrays`` a large message's trailing integer array (a map's ``data``) arrives as a numpy array.
+    With ``arrays`` a large message's integer ``data`` array (a map's cells) arrives as a numpy array.
     """
     _handlers[key] = handler
     if arrays:

@@ -109,6 +109,11 @@ class RedisStore:
         self._sync.delete(self._name, *self._sync.keys(f"{self._name}:recent:*"))
 
 
+def redis_key(name: str) -> str:
+    """A Redis key under this deployment's prefix (the channel layer's, so tests can isolate both)."""
+    return f"{settings.CHANNEL_LAYERS['default']['CONFIG'].get('prefix', 'cyborg')}:{name}"
+
+
 _store: StateStore | None = None
 
 
@@ -116,8 +121,7 @@ def get_store() -> StateStore:
     global _store
     if _store is None:
         if settings.REDIS_URL:
-            prefix = settings.CHANNEL_LAYERS["default"]["CONFIG"].get("prefix", "cyborg")
-            _store = RedisStore(settings.REDIS_URL, f"{prefix}:latest-state")
+            _store = RedisStore(settings.REDIS_URL, redis_key("latest-state"))
         else:
             _store = MemoryStore()
     return _store

@@ -7,7 +7,6 @@ older than what the page already has.
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from asgiref.sync import async_to_sync
@@ -15,17 +14,14 @@ from channels.layers import get_channel_layer
 from django.db import transaction
 from django.db.models.signals import post_delete, post_save
 
-from robot.groups import TopicUpdate, topic_group
+from robot.groups import topic_group
 from robot.models import Location
 from robot.navigation.selectors import location_list
-from robot.navigation.shared import LOCATIONS_KEY
+from robot.navigation.shared import LOCATIONS_KEY, server_update
 
 
 def broadcast_locations() -> None:
-    update: TopicUpdate = {
-        "type": "robot.update", "key": LOCATIONS_KEY, "topic": "", "msg_type": "",
-        "msg": {"locations": location_list()}, "t": time.time(),
-    }
+    update = server_update(LOCATIONS_KEY, {"locations": location_list()})
     async_to_sync(get_channel_layer().group_send)(topic_group(LOCATIONS_KEY), update)
 
 

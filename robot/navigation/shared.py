@@ -28,11 +28,14 @@ def map_dir() -> Path:
     return Path(settings.VAR_DIR) / "maps"
 
 
+def server_update(key: str, msg: dict[str, Any], t: float | None = None) -> TopicUpdate:
+    """A live update of a key the server writes itself (no ROS topic behind it)."""
+    return {"type": "robot.update", "key": key, "topic": "", "msg_type": "", "msg": msg, "t": t or time.time()}
+
+
 async def apublish_state(key: str, msg: dict[str, Any], t: float | None = None) -> None:
     """Store ``msg`` as the latest value of ``key`` and send it to every page watching it."""
-    update: TopicUpdate = {
-        "type": "robot.update", "key": key, "topic": "", "msg_type": "", "msg": msg, "t": t or time.time(),
-    }
+    update = server_update(key, msg, t)
     await get_store().aput(key, dict(update))
     await get_channel_layer().group_send(topic_group(key), update)
 

@@ -17,6 +17,8 @@ from typing import Any, Protocol
 
 from django.conf import settings
 
+from robot.state import redis_key
+
 
 @dataclass(frozen=True)
 class Holder:
@@ -149,8 +151,7 @@ def get_lock() -> DriveLock:
     global _lock
     if _lock is None:
         if settings.REDIS_URL:
-            prefix = settings.CHANNEL_LAYERS["default"]["CONFIG"].get("prefix", "cyborg")
-            _lock = RedisLock(settings.REDIS_URL, f"{prefix}:teleop-lock", settings.TELEOP_LOCK_TTL_S)
+            _lock = RedisLock(settings.REDIS_URL, redis_key("teleop-lock"), settings.TELEOP_LOCK_TTL_S)
         else:
             _lock = MemoryLock(settings.TELEOP_LOCK_TTL_S)
     return _lock

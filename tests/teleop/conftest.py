@@ -11,8 +11,9 @@ def _free_drive_lock(settings):
         if settings.REDIS_URL:
             import redis
 
-            prefix = settings.CHANNEL_LAYERS["default"]["CONFIG"].get("prefix", "cyborg")
-            redis.Redis.from_url(settings.REDIS_URL).delete(f"{prefix}:teleop-lock")
+            from robot.state import redis_key
+
+            redis.Redis.from_url(settings.REDIS_URL).delete(redis_key("teleop-lock"))
 
     clear()
     yield
