@@ -5,6 +5,9 @@ BIN := $(VENV)/bin
 PORT ?= 8000
 SIM_PORT ?= 9090
 VIDEO_PORT ?= 8080
+# The server talks to the simulator `make run` starts, unless told otherwise.
+ROSBRIDGE_URL ?= ws://127.0.0.1:$(SIM_PORT)
+VIDEO_URL ?= http://127.0.0.1:$(VIDEO_PORT)
 STAMP := $(VENV)/.installed
 
 .PHONY: run test install browser lint bench clean
@@ -26,10 +29,11 @@ browser:
 run: install
 	$(BIN)/python manage.py migrate --noinput
 	$(BIN)/python manage.py bootstrap
-	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT); open http://127.0.0.1:$(PORT)/"
+	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT), server talks to $(ROSBRIDGE_URL); open http://127.0.0.1:$(PORT)/"
 	@trap 'kill 0' INT TERM EXIT; \
 	$(BIN)/python manage.py simrobot --port $(SIM_PORT) --video-port $(VIDEO_PORT) & \
-	$(BIN)/daphne -b 127.0.0.1 -p $(PORT) cyborg_site.asgi:application
+	ROSBRIDGE_URL='$(ROSBRIDGE_URL)' VIDEO_URL='$(VIDEO_URL)' \
+	  $(BIN)/daphne -b 127.0.0.1 -p $(PORT) cyborg_site.asgi:application
 
 test: install browser
 	bash scripts/test.sh
