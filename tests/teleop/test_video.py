@@ -93,3 +93,90 @@ def test_it_answers_503_with_a_placeholder_while_the_video_server_is_down(client
     assert response.status_code == 503
     assert response["Content-Type"] == "image/svg+xml" and response["Retry-After"]
     assert b"Camera unavailable" in response.content
+
+
+def upstream_streams(video) -> int:
+    return video.call(lambda: len(video.robot.video.writers))
+
+
+async def read_frames(app: ApplicationCommunicator, count: int) -> bytes:
+    body = b""
+    while body.count(b"\xff\xd8") < count:
+        message = await app.receive_output(timeout=5)
+        assert message["type"] == "http.response.body" and message.get("more_body")
+        body += message["body"]
+    return body
+
+
+async def test_many_viewers_share_one_upstream_stream_closed_after_the_last_leaves(video, viewer, operator):
+    cookies = [await asyncio.to_thread(session_cookie, user) for user in (viewer, operator, viewer)]
+    viewers = [await open_stream("/video/stream", cookie) for cookie in cookies]
+    for app, start in viewers:
+        assert start["status"] == 200
+        await read_frames(app, 2)
+    assert upstream_streams(video) == 1
+
+    other_size, _ = await open_stream_with_query("/video/stream", cookies[0], b"width=320&height=240")
+    await read_frames(other_size, 1)
+    assert upstream_streams(video) == 2  # another size is another upstream stream
+    await other_size.send_input({"type": "http.disconnect"})
+    await other_size.wait(timeout=5)
+
+    for app, _ in viewers[:-1]:
+        await app.send_input({"type": "http.disconnect"})
+        await app.wait(timeout=5)
+    await async_wait_until(lambda: upstream_streams(video) == 1, timeout=5, what="only the shared stream left")
+    last, _ = viewers[-1]
+    await read_frames(last, 2)  # the remaining viewer still gets new frames
+    await last.send_input({"type": "http.disconnect"})
+    await last.wait(timeout=5)
+    await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="the upstream stream closed")
+
+
+async def open_stream_with_query(path: str, cookie: bytes, query: bytes) -> tuple[ApplicationCommunicator, dict]:
+    from cyborg_site.asgi import application
+
+    app = ApplicationCommunicator(application, http_scope(path, cookie, query))
+    await app.send_input({"type": "http.request", "body": b"", "more_body": False})
+    start = await app.receive_output(timeout=10)
+    assert start["status"] == 200
+    return app, start
+
+
+def stamp(part: bytes) -> float:
+    head = part.split(b"\r\n\r\n", 1)[0].decode()
+    return float(next(line.split(":", 1)[1] for line in head.split("\r\n") if line.startswith("X-Timestamp")))
+
+
+async def test_a_slow_viewer_skips_to_the_newest_frame_without_delaying_others(video):
+    from dashboard.videorelay import VideoRelay
+
+    relay = VideoRelay()
+    params = {"topic": "/videostream", "type": "mjpeg"}
+    fast, slow = await relay.join(video.video_url, params), await relay.join(video.video_url, params)
+    seen: list[float] = []
+    for _ in range(6):  # the slow viewer reads nothing meanwhile
+        part = await asyncio.wait_for(fast.next(), 5)
+        assert part is not None
+        seen.append(stamp(part))
+    part = await asyncio.wait_for(slow.next(), 1)
+    assert part is not None and stamp(part) >= seen[-1]  # the newest, not the oldest unread
+    assert slow.frame is None and not slow.ready.is_set()  # nothing else queued behind it
+    assert seen == sorted(seen) and len(set(seen)) == 6
+    assert upstream_streams(video) == 1
+    relay.leave(fast)
+    relay.leave(slow)
+    await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="the upstream stream closed")
+
+
+async def test_viewers_are_told_when_the_upstream_goes_away(video):
+    from dashboard.videorelay import VideoRelay
+
+    relay = VideoRelay()
+    viewer = await relay.join(video.video_url, {"topic": "/videostream", "type": "mjpeg"})
+    assert await asyncio.wait_for(viewer.next(), 5) is not None
+    video.call(lambda: [w.transport.abort() for w in video.robot.video.writers])
+    while (part := await asyncio.wait_for(viewer.next(), 5)) is not None:
+        assert part.startswith(b"--")
+    relay.leave(viewer)
+    assert not relay.upstreams
