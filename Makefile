@@ -10,7 +10,7 @@ ROSBRIDGE_URL ?= ws://127.0.0.1:$(SIM_PORT)
 VIDEO_URL ?= http://127.0.0.1:$(VIDEO_PORT)
 STAMP := $(VENV)/.installed
 
-.PHONY: run test install browser lint bench clean
+.PHONY: run test install browser nginx stack stack-down lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -26,6 +26,19 @@ browser:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq chromium; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq chromium; fi; }
 
+# Debian's nginx (and openssl for the self-signed certificate) for scripts/stack.sh and its tests.
+nginx:
+	@{ command -v nginx || test -x /usr/sbin/nginx; } >/dev/null 2>&1 && command -v openssl >/dev/null 2>&1 && command -v curl >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq nginx openssl curl; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq nginx openssl curl; fi; }
+
+# The production topology on this machine (see README, "Deploy").
+stack: install nginx
+	bash scripts/stack.sh up
+
+stack-down:
+	bash scripts/stack.sh down
+
 run: install
 	$(BIN)/python manage.py migrate --noinput
 	$(BIN)/python manage.py bootstrap
@@ -35,7 +48,7 @@ run: install
 	ROSBRIDGE_URL='$(ROSBRIDGE_URL)' VIDEO_URL='$(VIDEO_URL)' \
 	  $(BIN)/daphne -b 127.0.0.1 -p $(PORT) cyborg_site.asgi:application
 
-test: install browser
+test: install browser nginx
 	bash scripts/test.sh
 
 lint: install

@@ -118,6 +118,12 @@ STATIC_ROOT = VAR_DIR / "staticfiles"
 # Serve straight from the app and project static folders: no collectstatic step to forget.
 WHITENOISE_USE_FINDERS = True
 WHITENOISE_AUTOREFRESH = DEBUG
+# Production: collectstatic writes content-hashed names that nginx serves with year-long caching.
+if env_bool("STATIC_HASHED", False):
+    STORAGES = {
+        "default": {"BACKEND": "django.core.files.storage.FileSystemStorage"},
+        "staticfiles": {"BACKEND": "cyborg_site.staticfiles.HashedStaticFiles"},
+    }
 
 # --- Redis: channel layer, Celery broker, latest-state store ---------------------------
 REDIS_URL = env_str("REDIS_URL")
@@ -138,6 +144,9 @@ else:
     CHANNEL_LAYERS = {"default": {"BACKEND": "channels.layers.InMemoryChannelLayer", "CONFIG": {"capacity": 200}}}
 
 CELERY_BROKER_URL = REDIS_URL or "memory://"
+if REDIS_URL:
+    # Celery's queues under the same prefix as everything else, so deployments can share one Redis.
+    CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
 CELERY_RESULT_BACKEND = REDIS_URL or None
 CELERY_TASK_ALWAYS_EAGER = False
 CELERY_TASK_IGNORE_RESULT = True
