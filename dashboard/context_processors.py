@@ -1,6 +1,11 @@
 from django.conf import settings
+from django.urls import reverse
 
 from cyborg_site.roles import is_admin, is_operator, role_of
+from dashboard.routing import LIVE_SOCKET_PATH
+
+# The command API views the pages' command buttons post to, by their data-command name.
+COMMAND_NAMES = ("mode", "event", "speech", "emotion", "emotion-system", "motors", "playback", "dome")
 
 
 def roles(request):
@@ -10,4 +15,19 @@ def roles(request):
         "can_command": is_operator(user),
         "can_admin": is_admin(user),
         "stale_after_s": settings.STALE_AFTER_S,
+    }
+
+
+def site_config(request):
+    """What every page's scripts read from base.html's "site-config": URLs and the time policy."""
+    return {
+        "site_config": {
+            "time_zone": settings.TIME_ZONE,
+            "urls": {
+                "live_socket": LIVE_SOCKET_PATH,
+                "login": reverse("login"),
+                "estop": reverse("robot-estop"),
+            },
+            "commands": {name: reverse(f"api-robot-{name}") for name in COMMAND_NAMES},
+        },
     }

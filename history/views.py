@@ -1,4 +1,5 @@
 from django.shortcuts import render
+from django.urls import reverse
 
 from cyborg_site.roles import is_admin
 from history.selectors import recorded_topics
@@ -19,6 +20,11 @@ def index(request):
                     "scale": 1, "unit": "", "range": "day", "label": "Emotion (PAD) over time"},
         },
         "state_topic": ri.topic("state_change").name,
+        "urls": {
+            "samples": reverse("history-samples"),
+            "timeline": reverse("history-timeline"),
+            "export": reverse("history-export"),
+        },
     }
     context = {"history_config": config, "can_edit_policies": is_admin(request.user)}
     return render(request, "history/index.html", context)

@@ -7,6 +7,8 @@ from django.http import HttpRequest, HttpResponse
 from django.shortcuts import render
 from django.urls import reverse
 
+from dashboard.routing_teleop import TELEOP_SOCKET_PATH
+
 
 def drive_config() -> dict[str, object]:
     return {
@@ -16,6 +18,7 @@ def drive_config() -> dict[str, object]:
         "deadman_s": settings.TELEOP_DEADMAN_S,
         "stream_url": reverse("dashboard:video-stream"),
         "snapshot_url": reverse("dashboard:video-snapshot"),
+        "teleop_socket": TELEOP_SOCKET_PATH,
         "keys": ["odom", "robot_pose", "motors_state"],
     }
 

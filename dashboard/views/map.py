@@ -28,6 +28,9 @@ def map_page(request):
             "status": reverse("api-navigation-status"),
             "initial_pose": reverse("api-navigation-initial-pose"),
             "locations": reverse("api-location-list"),
+            # {name} is replaced by the location's name.
+            "location": reverse("api-location-detail", args=["NAME"]).replace("NAME", "{name}"),
+            "location_go": reverse("api-location-go", args=["NAME"]).replace("NAME", "{name}"),
         },
     }
     return render(request, "dashboard/map.html", {"map_config": config})

@@ -1,26 +1,27 @@
 // Command controls: mode commander, events, speech, emotion, sound, dome, motors.
 // Every control posts to the REST API (session + CSRF) and shows the outcome.
 //
-// initCommands(root) wires every [data-command] button and form under root. Live values
-// arrive as "robot:update" events on document (dashboard.js dispatches them) when a page
-// already has a live socket in window.cyborgLive; otherwise it opens its own.
-import { connectLive, notify, postJSON } from "./live.js";
+// initCommands(root) wires every [data-command] button and form under root; the values
+// it shows come from the page's live socket.
+import { notify, postJSON } from "./api.js";
+import { site } from "./config.js";
+import { live } from "./live.js";
 
 const KEYS = ["state_change", "state_transitions", "mode_request"];
-const apiUrl = (command) => `/api/robot/${command}/`;
 
 // Send one command; resolves to the API's answer, or null after telling the user what failed.
 export async function sendCommand(command, body, { control = null, result = null } = {}) {
   if (control) control.disabled = true;
   try {
-    const answer = await postJSON(apiUrl(command), body);
+    const url = site.commands[command];
+    if (!url) throw new Error(`Unknown command ${command}`);
+    const answer = await postJSON(url, body);
     notify(answer.outcome, "ok");
     showResult(result, answer.outcome, true);
     return answer;
   } catch (err) {
-    const message = err.status === 429 ? `Too many commands: ${err.message}` : err.message;
-    notify(message, "error");
-    showResult(result, message, false);
+    notify(err.message, "error");
+    showResult(result, err.message, false);
     return null;
   } finally {
     if (control) control.disabled = false;
@@ -48,7 +49,7 @@ function reached(config, mode, state) {
   return state === target;
 }
 
-export function initCommands(root = document, { live = window.cyborgLive } = {}) {
+export function initCommands(root = document) {
   const field = (name) => root.querySelectorAll(`[data-field="${name}"]`);
   const set = (name, text) => field(name).forEach((el) => { el.textContent = text; });
   const configEl = root.querySelector("[data-commands='mode'][data-config]");
@@ -140,12 +141,7 @@ export function initCommands(root = document, { live = window.cyborgLive } = {})
     renderMode();
   }
 
-  if (live) {
-    document.addEventListener("robot:update", (ev) => onUpdate(ev.detail));
-    live.watch(KEYS);
-  } else {
-    connectLive({ keys: KEYS, onUpdate });
-  }
+  live.watch(KEYS, onUpdate);
   setInterval(renderMode, 1000);
   return { send: sendCommand };
 }

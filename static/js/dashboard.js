@@ -1,6 +1,11 @@
-import { connectLive, formatAge, notify } from "./live.js";
+// The dashboard: live cards, alerts, the robot log, and the command cards.
+import { notify } from "./api.js";
+import { initCommands } from "./commands.js";
+import { readConfig } from "./config.js";
+import { live } from "./live.js";
+import { formatAge } from "./time.js";
 
-const config = JSON.parse(document.getElementById("live-config").textContent);
+const config = readConfig("live-config");
 const latest = {}; // key -> {msg, t}
 const field = (name) => document.querySelectorAll(`[data-field="${name}"]`);
 const set = (name, text) => field(name).forEach((el) => { el.textContent = text; });
@@ -148,20 +153,15 @@ function tickAges() {
 }
 setInterval(tickAges, 1000);
 
-const live = connectLive({
-  keys: config.keys,
-  onUpdate(frame) {
-    latest[frame.key] = frame;
-    try { renderers[frame.key]?.(frame.msg); } catch (e) { console.error("render", frame.key, e); }
-    tickAges();
-    document.dispatchEvent(new CustomEvent("robot:update", { detail: frame }));
-  },
-  onStatus: renderStatus,
+live.watch(config.keys, (frame) => {
+  latest[frame.key] = frame;
+  try { renderers[frame.key]?.(frame.msg); } catch (e) { console.error("render", frame.key, e); }
+  tickAges();
 });
+live.onStatus(renderStatus);
 document.getElementById("reconnect-btn")?.addEventListener("click", () => {
   live.send({ action: "reconnect" });
   notify("Asking the link to reconnect…");
 });
-window.cyborgLive = live;
 tickAges();
-import("./commands.js").then(({ initCommands }) => initCommands(document, { live }));
+initCommands(document);

@@ -1,14 +1,18 @@
-// The manual control page: keyboard and joystick → /ws/teleop/, camera via the server's
+// The manual control page: keyboard and joystick → the teleop socket, camera via the server's
 // proxy, commanded and measured velocity. The server does the rate, the clamping and the
 // deadman; this page only says what the operator's hands are doing, ~20 times a second.
-import { connectLive, notify } from "./live.js";
 import { create as createStick } from "../vendor/nipplejs/index.mjs";
+import { notify } from "./api.js";
+import { initCommands } from "./commands.js";
+import { readConfig, socketURL, toLogin } from "./config.js";
+import { live } from "./live.js";
 
-const config = JSON.parse(document.getElementById("drive-config").textContent);
+const config = readConfig("drive-config");
 const card = document.getElementById("drive");
 const canDrive = card.dataset.canDrive === "true";
 const canTakeover = card.dataset.canTakeover === "true";
 const SEND_INTERVAL_MS = 50;
+const UNAUTHENTICATED = 4401;
 const $ = (id) => document.getElementById(id);
 const fmt = (v, digits = 2) => (Number.isFinite(v) ? v.toFixed(digits) : "—");
 
@@ -30,12 +34,10 @@ function onUpdate(frame) {
   } else if (frame.key === "motors_state") {
     $("motors").textContent = m.data ? "enabled" : "disabled";
   }
-  document.dispatchEvent(new CustomEvent("robot:update", { detail: frame }));
 }
-const live = connectLive({ keys: config.keys, onUpdate });
-window.cyborgLive = live;
-// Mode buttons, speech box and motor button belong to the commands module (loaded if present).
-import("./commands.js").then((m) => m.initCommands(document)).catch((e) => console.warn("commands", e));
+live.watch(config.keys, onUpdate);
+// Mode buttons, speech box and motor button.
+initCommands(document);
 
 // --- camera --------------------------------------------------------------------------------
 const img = $("camera-img");
@@ -98,8 +100,7 @@ function setCommanded(linear, angular) {
 }
 
 function openSocket() {
-  const proto = location.protocol === "https:" ? "wss" : "ws";
-  ws = new WebSocket(`${proto}://${location.host}/ws/teleop/`);
+  ws = new WebSocket(socketURL(config.teleop_socket));
   ws.onopen = () => { wsDelay = 500; card.classList.remove("offline"); };
   ws.onmessage = (ev) => {
     const frame = JSON.parse(ev.data);
@@ -112,7 +113,7 @@ function openSocket() {
     Object.assign(lock, { holder: null, you: false });
     renderLock();
     $("lock-state").textContent = "Drive connection lost — reconnecting…";
-    if (ev.code === 4401) { location.href = "/accounts/login/?next=" + encodeURIComponent(location.pathname); return; }
+    if (ev.code === UNAUTHENTICATED) { toLogin(); return; }
     setTimeout(openSocket, wsDelay);
     wsDelay = Math.min(wsDelay * 2, 8000);
   };

@@ -1,14 +1,14 @@
-// The plots page: downsampled series from /api/history/samples/ drawn with uPlot
+// The plots page: downsampled series from the history API drawn with uPlot
 // (mean line, min/max band so spikes stay visible), presets, state timeline, exports.
-import { connectLive, notify } from "./live.js";
+import { getJSON, notify } from "./api.js";
+import { readConfig } from "./config.js";
+import { formatDuration } from "./time.js";
 
-const config = JSON.parse(document.getElementById("history-config").textContent);
+const config = readConfig("history-config");
 const $ = (id) => document.getElementById(id);
 const RANGES = { hour: 3600, day: 86400, week: 7 * 86400 };
 const COLORS = ["#2563eb", "#dc2626", "#059669", "#d97706", "#7c3aed"];
 let chart = null;
-
-connectLive({});
 
 function fillTopics(selected) {
   const topics = $("topic");
@@ -36,16 +36,9 @@ function range() {
   return { start: end - RANGES[choice], end };
 }
 
-async function getJSON(url) {
-  const res = await fetch(url, { credentials: "same-origin" });
-  const data = await res.json().catch(() => ({}));
-  if (!res.ok) throw new Error(data.detail || `Request failed (${res.status})`);
-  return data;
-}
-
 function seriesURL(topic, field, { start, end }) {
   const q = new URLSearchParams({ topic, field, start, end, max_points: 2000 });
-  return `/api/history/samples/?${q}`;
+  return `${config.urls.samples}?${q}`;
 }
 
 // Join several series on their bucket times (same topic and range → same grid).
@@ -105,16 +98,10 @@ async function plot(topic, fields, { scale = 1, unit = "" } = {}) {
   }
 }
 
-function formatDuration(s) {
-  if (s < 90) return `${s.toFixed(1)} s`;
-  if (s < 5400) return `${(s / 60).toFixed(1)} min`;
-  return `${(s / 3600).toFixed(2)} h`;
-}
-
 async function timeline() {
   const r = range();
   try {
-    const data = await getJSON(`/api/history/timeline/?${new URLSearchParams(r)}`);
+    const data = await getJSON(`${config.urls.timeline}?${new URLSearchParams(r)}`);
     if (chart) { chart.destroy(); chart = null; }
     $("chart").hidden = true;
     $("timeline").hidden = false;
@@ -161,7 +148,7 @@ function preset(name) {
 
 function exportURL(format) {
   const r = range();
-  return `/api/history/export/?${new URLSearchParams({ topic: $("topic").value, start: r.start, end: r.end, format })}`;
+  return `${config.urls.export}?${new URLSearchParams({ topic: $("topic").value, start: r.start, end: r.end, format })}`;
 }
 
 $("topic").addEventListener("change", () => fillFields());

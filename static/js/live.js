@@ -1,110 +1,95 @@
-// The live websocket shared by every page: reconnects with backoff, keeps the
-// header's robot pill current, and hands topic updates to the page.
+// The live websocket, one per page: pages import `live` and subscribe to the topic keys they
+// show. It reconnects with backoff, re-watches everything after a reconnect, hands a late
+// subscriber the latest frame of a key already watched, and reports the link status.
+//
+//   import { live } from "./live.js";
+//   live.watch(["battery_soc"], (frame) => …);   // frame = {key, msg, t}
+//   live.onStatus((status) => …);                // {connected, link_running, since, url, …} or {server_down}
+//   live.onOpen(() => …);                        // after every (re)connect
+//   live.send({action: "reconnect"});
+import { site, socketURL, toLogin } from "./config.js";
+import { notify } from "./notices.js";
 
-const pill = () => document.getElementById("link-pill");
+const UNAUTHENTICATED = 4401;
 
-export function notify(message, level = "info", { timeout = 6000 } = {}) {
-  const box = document.getElementById("notices");
-  if (!box) return;
-  const el = document.createElement("div");
-  el.className = `notice notice-${level}`;
-  el.setAttribute("role", level === "error" ? "alert" : "status");
-  el.textContent = message;
-  const close = document.createElement("button");
-  close.className = "linkish";
-  close.type = "button";
-  close.textContent = "×";
-  close.setAttribute("aria-label", "Dismiss");
-  close.onclick = () => el.remove();
-  el.append(close);
-  box.append(el);
-  if (timeout) setTimeout(() => el.remove(), timeout);
-}
+class Live {
+  #ws = null;
+  #delay = 500;
+  #started = false;
+  #queue = [];
+  #handlers = new Map(); // key -> Set(handler)
+  #latest = new Map(); // key -> last frame
+  #statusHandlers = new Set();
+  #openHandlers = new Set();
+  status = null;
 
-export function csrfToken() {
-  const m = document.cookie.match(/(?:^|; )csrftoken=([^;]+)/);
-  return m ? decodeURIComponent(m[1]) : "";
-}
-
-// POST JSON to the API; resolves to the JSON body, rejects with an Error carrying the server's message.
-export async function postJSON(url, body = {}) {
-  const res = await fetch(url, {
-    method: "POST",
-    headers: { "Content-Type": "application/json", "X-CSRFToken": csrfToken() },
-    credentials: "same-origin",
-    body: JSON.stringify(body),
-  });
-  let data = {};
-  try { data = await res.json(); } catch { /* empty body */ }
-  if (!res.ok) {
-    const err = new Error(data.detail || data.message || `Request failed (${res.status})`);
-    err.status = res.status;
-    err.data = data;
-    throw err;
-  }
-  return data;
-}
-
-export function formatAge(seconds) {
-  if (seconds == null || !isFinite(seconds)) return "never";
-  if (seconds < 1.5) return "just now";
-  if (seconds < 90) return `${Math.round(seconds)} s ago`;
-  if (seconds < 5400) return `${Math.round(seconds / 60)} min ago`;
-  return `${Math.round(seconds / 3600)} h ago`;
-}
-
-export function connectLive({ keys = [], onUpdate = () => {}, onStatus = () => {}, onMessage = () => {}, onOpen = () => {} } = {}) {
-  let ws = null;
-  let delay = 500;
-  let closedByUs = false;
-  let watching = new Set(keys);
-  const queue = [];
-
-  function send(obj) {
-    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(obj));
-    else queue.push(obj);
+  // Subscribe handler to frames of keys; returns a function that unsubscribes.
+  watch(keys, handler) {
+    const fresh = keys.filter((k) => !this.#handlers.has(k));
+    for (const key of keys) {
+      if (!this.#handlers.has(key)) this.#handlers.set(key, new Set());
+      this.#handlers.get(key).add(handler);
+      const last = this.#latest.get(key);
+      if (last) queueMicrotask(() => handler(last));
+    }
+    if (fresh.length) this.send({ action: "watch", keys: fresh });
+    this.start();
+    return () => keys.forEach((k) => this.#handlers.get(k)?.delete(handler));
   }
 
-  function setPill(status) {
-    const el = pill();
-    if (!el) return;
-    el.className = "pill " + (status.connected ? "pill-ok" : "pill-bad");
-    el.textContent = status.connected ? "robot online" : (status.link_running === false ? "link down" : "robot offline");
-    el.title = status.url || "";
+  onStatus(handler) {
+    this.#statusHandlers.add(handler);
+    if (this.status) queueMicrotask(() => handler(this.status));
+    this.start();
   }
 
-  function open() {
-    const proto = location.protocol === "https:" ? "wss" : "ws";
-    ws = new WebSocket(`${proto}://${location.host}/ws/live/`);
+  onOpen(handler) { this.#openHandlers.add(handler); this.start(); }
+
+  send(obj) {
+    if (this.#ws?.readyState === WebSocket.OPEN) this.#ws.send(JSON.stringify(obj));
+    else if (obj.action !== "watch") this.#queue.push(obj); // watches are re-sent on open anyway
+  }
+
+  start() {
+    if (this.#started) return;
+    this.#started = true;
+    this.#open();
+  }
+
+  #setStatus(status) {
+    this.status = status;
+    for (const fn of this.#statusHandlers) fn(status);
+  }
+
+  #open() {
+    const ws = new WebSocket(socketURL(site.urls.live_socket));
+    this.#ws = ws;
     ws.onopen = () => {
-      delay = 500;
+      this.#delay = 500;
       document.body.classList.remove("socket-down");
-      if (watching.size) ws.send(JSON.stringify({ action: "watch", keys: [...watching] }));
-      while (queue.length) ws.send(JSON.stringify(queue.shift()));
-      onOpen();
+      if (this.#handlers.size) ws.send(JSON.stringify({ action: "watch", keys: [...this.#handlers.keys()] }));
+      while (this.#queue.length) ws.send(JSON.stringify(this.#queue.shift()));
+      for (const fn of this.#openHandlers) fn();
     };
     ws.onmessage = (ev) => {
       const frame = JSON.parse(ev.data);
-      if (frame.kind === "update") onUpdate(frame);
-      else if (frame.kind === "status") { setPill(frame); onStatus(frame); }
+      if (frame.kind === "update") {
+        this.#latest.set(frame.key, frame);
+        for (const fn of this.#handlers.get(frame.key) ?? []) {
+          try { fn(frame); } catch (e) { console.error("live update", frame.key, e); }
+        }
+      } else if (frame.kind === "status") this.#setStatus(frame);
       else if (frame.kind === "error") notify(frame.message, "error");
       else if (frame.kind === "notice") notify(frame.message, "info");
-      onMessage(frame);
     };
     ws.onclose = (ev) => {
-      if (closedByUs) return;
       document.body.classList.add("socket-down");
-      setPill({ connected: false, link_running: false, url: "server connection lost" });
-      if (ev.code === 4401) { location.href = "/accounts/login/?next=" + encodeURIComponent(location.pathname); return; }
-      onStatus({ connected: false, server_down: true });
-      setTimeout(open, delay);
-      delay = Math.min(delay * 2, 8000);
+      if (ev.code === UNAUTHENTICATED) { toLogin(); return; }
+      this.#setStatus({ connected: false, server_down: true, link_running: false, url: "server connection lost" });
+      setTimeout(() => this.#open(), this.#delay);
+      this.#delay = Math.min(this.#delay * 2, 8000);
     };
   }
-  open();
-  return {
-    send,
-    watch(more) { more.forEach((k) => watching.add(k)); send({ action: "watch", keys: more }); },
-    close() { closedByUs = true; ws && ws.close(); },
-  };
 }
+
+export const live = new Live();

@@ -1,11 +1,14 @@
 // The map page: the server-rendered map image with a live overlay (robot, path, goal,
 // named locations), zoom/pan/pinch, press-drag-release goals and initial poses.
-import { connectLive, csrfToken, notify, postJSON } from "./live.js";
+import { deleteJSON, getJSON, notify, postJSON } from "./api.js";
+import { readConfig } from "./config.js";
+import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
 import { attachGestures } from "./map/gestures.js";
 import { quaternionToYaw, View } from "./map/view.js";
 
-const config = JSON.parse(document.getElementById("map-config").textContent);
+const config = readConfig("map-config");
+const locationURL = (template, name) => template.replace("{name}", encodeURIComponent(name));
 const root = document.getElementById("map-view");
 const img = document.getElementById("map-image");
 const canvas = document.getElementById("map-overlay");
@@ -180,19 +183,8 @@ $("goal-cancel").onclick = async () => {
 
 // --- named locations -------------------------------------------------------------------
 
-async function request(method, url, body) {
-  const res = await fetch(url, {
-    method, credentials: "same-origin",
-    headers: { "Content-Type": "application/json", "X-CSRFToken": csrfToken() },
-    body: body ? JSON.stringify(body) : undefined,
-  });
-  const data = res.status === 204 ? {} : await res.json().catch(() => ({}));
-  if (!res.ok) throw new Error(data.detail || `Request failed (${res.status})`);
-  return data;
-}
-
 async function reloadLocations() {
-  state.locations = await request("GET", config.urls.locations);
+  state.locations = await getJSON(config.urls.locations);
   renderLocations();
 }
 
@@ -230,14 +222,14 @@ function button(text, onclick, className) {
 
 async function goTo(name) {
   try {
-    await postJSON(`${config.urls.locations}${encodeURIComponent(name)}/go/`);
+    await postJSON(locationURL(config.urls.location_go, name));
     notify(`Sending the robot to ${name}`, "ok", { timeout: 3000 });
   } catch (err) { notify(err.message, "error"); }
 }
 
 async function removeLocation(name) {
   if (!confirm(`Delete the location “${name}”?`)) return;
-  try { await request("DELETE", `${config.urls.locations}${encodeURIComponent(name)}/`); await reloadLocations(); } catch (err) { notify(err.message, "error"); }
+  try { await deleteJSON(locationURL(config.urls.location, name)); await reloadLocations(); } catch (err) { notify(err.message, "error"); }
 }
 
 $("send-to-btn").onclick = () => $("send-to").value && goTo($("send-to").value);
@@ -270,9 +262,6 @@ renderGoal();
 new ResizeObserver(resize).observe(root);
 showMap(config.map);
 let opened = false;
-connectLive({
-  keys: config.keys,
-  onUpdate: (f) => { onUpdate[f.key]?.(f.msg); scheduleDraw(); },
-  // Changes are only sent while connected: after a reconnect, fetch what may have been missed.
-  onOpen: () => { if (opened) reloadLocations().catch(() => {}); opened = true; },
-});
+live.watch(config.keys, (f) => { onUpdate[f.key]?.(f.msg); scheduleDraw(); });
+// Changes are only sent while connected: after a reconnect, fetch what may have been missed.
+live.onOpen(() => { if (opened) reloadLocations().catch(() => {}); opened = true; });
