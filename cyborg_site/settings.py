@@ -187,6 +187,10 @@ TELEOP_MAX_LINEAR = env_float("TELEOP_MAX_LINEAR", 0.5, minimum=0)
 TELEOP_MAX_ANGULAR = env_float("TELEOP_MAX_ANGULAR", 1.0, minimum=0)
 # The drive lock frees itself after this long without input (a driver who walked away).
 TELEOP_LOCK_TTL_S = env_float("TELEOP_LOCK_TTL_S", 30.0, minimum=1)
+# The link publishes zero itself when moving Twists stop arriving for this long (a web process died).
+TELEOP_LINK_DEADMAN_S = env_float("TELEOP_LINK_DEADMAN_S", 0.35, minimum=0.05)
+# After an E-STOP the link keeps publishing zero at the teleop rate for this long.
+ESTOP_HOLD_S = env_float("ESTOP_HOLD_S", 1.0, minimum=0)
 
 # --- History (issue 7) -----------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)

@@ -44,7 +44,14 @@ class RobotTimeout(RobotError):
     code = "timeout"
 
 
-_ERRORS: dict[str, type[RobotError]] = {"offline": RobotOffline, "timeout": RobotTimeout}
+class EstopEngaged(RobotError):
+    """Refused because the E-STOP is latched."""
+
+    status_code = 409
+    code = "estop"
+
+
+_ERRORS: dict[str, type[RobotError]] = {"offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged}
 
 
 async def _is_online() -> bool:

@@ -38,6 +38,8 @@ async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotL
         layer=get_channel_layer(),
         max_backoff_s=settings.ROBOT_LINK_MAX_BACKOFF_S,
         service_timeout_s=settings.ROBOT_REQUEST_TIMEOUT_S,
+        guard_settings={"rate_hz": settings.TELEOP_RATE_HZ, "hold_s": settings.ESTOP_HOLD_S,
+                        "deadman_s": settings.TELEOP_LINK_DEADMAN_S},
     )
     await link.start()
     link_module.current = link

@@ -28,6 +28,7 @@ from robot.groups import (
     TopicUpdate,
     topic_group,
 )
+from robot.guard import LATCH_KEY, CmdVelGuard
 from robot.rosclient import LinkRos
 from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
 
@@ -39,6 +40,7 @@ Listener = Callable[[str, str, dict[str, Any], float], None]
 Handler = Callable[[ri.Topic, dict[str, Any], float], Awaitable[None] | None]
 
 _handlers: dict[str, Handler] = {}
+ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 _array_keys: set[str] = set()
 
 
@@ -68,6 +70,7 @@ class RobotLink:
         topics: Iterable[ri.Topic] | None = None,
         max_backoff_s: float = 10.0,
         service_timeout_s: float = 5.0,
+        guard_settings: dict[str, float] | None = None,
     ) -> None:
         self.url = url
         self.store = store
@@ -88,6 +91,8 @@ class RobotLink:
         self._stopped = False
         self._serving: asyncio.Future | None = None
         self._inflight: set[asyncio.Future] = set()
+        self._guard_settings = guard_settings or {"rate_hz": 10.0, "hold_s": 1.0, "deadman_s": 0.35}
+        self.guard: CmdVelGuard | None = None
 
     # --- lifecycle -------------------------------------------------------------------
 
@@ -96,6 +101,8 @@ class RobotLink:
 
         self.loop = asyncio.get_running_loop()
         self._coalescer = Coalescer(self._send_update, loop=self.loop)
+        self.guard = CmdVelGuard(self._publish_zero, loop=self.loop, **self._guard_settings)
+        await self._sync_latch()
         self.ros = LinkRos(self.url, array_topics=array_topics())  # connects (and later reconnects) by itself
         self.ros.factory.maxDelay = self.max_backoff_s
         self.ros.factory.initialDelay = 0.5
@@ -127,6 +134,8 @@ class RobotLink:
                 log.warning("robot link request loop did not stop in time")
         await _cancel_within(self._tasks, 2)
         self._tasks.clear()
+        if self.guard is not None:
+            self.guard.stop()  # zero before the connection goes, if the robot may be moving
         if self._coalescer is not None:
             await _cancel_within([self._coalescer._task], 1)
             self._coalescer.close()
@@ -241,7 +250,17 @@ class RobotLink:
             # Failed connection attempts emit no "close"; count them from the factory.
             if self.ros is not None and not self.connected:
                 self.attempts = max(self.attempts, getattr(self.ros.factory, "retries", 0))
+            await self._sync_latch()
             await self._publish_status()
+
+    async def _sync_latch(self) -> None:
+        try:
+            entry = (await self.store.aget_many([LATCH_KEY])).get(LATCH_KEY)
+        except Exception:
+            log.exception("could not read the E-STOP latch")
+            return
+        if self.guard is not None:
+            self.guard.sync(bool(entry and entry.get("msg", {}).get("latched")))
 
     def reconnect(self) -> None:
         """Try now instead of waiting out the backoff (the page's reconnect button)."""
@@ -294,14 +313,34 @@ class RobotLink:
         if op == "subscribe":
             self.subscribe(request["topic"], request["msg_type"])
             return {"ok": True}
+        if op == "ping":
+            return {"ok": True}
+        if op == "estop_release":
+            if self.guard is not None:
+                self.guard.release()
+            return {"ok": True}
+        if op == "estop" and self.guard is not None:
+            self.guard.engage()  # latched even when the robot is offline
         if not self.connected or self.ros is None or not self.ros.is_connected:
             return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if op == "estop":
+            return {"ok": True}
         if op == "publish":
+            guarded = self.guard is not None and request["topic"] == ri.topic("cmd_vel").name
+            refusal = self.guard.check(request["msg"]) if guarded and self.guard else None
+            if refusal:
+                return {"ok": False, "error_code": "estop", "error": refusal}
             self._publisher(request["topic"], request["msg_type"]).publish(roslibpy.Message(request["msg"]))
             return {"ok": True}
         if op == "call_service":
             return await self._call_service(request)
         return {"ok": False, "error_code": "invalid", "error": f"Unknown link operation {op!r}"}
+
+    def _publish_zero(self) -> None:
+        if self.ros is None or not self.ros.is_connected:
+            raise RuntimeError("robot offline")
+        cmd_vel = ri.topic("cmd_vel")
+        self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ZERO_TWIST))
 
     def _publisher(self, name: str, msg_type: str) -> roslibpy.Topic:
         topic = self._publishers.get(name)

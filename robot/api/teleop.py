@@ -1,4 +1,4 @@
-"""The emergency stop over the API: ``POST /api/robot/estop/``."""
+"""The emergency stop over the API: ``GET|POST /api/robot/estop/``, ``POST /api/robot/estop/release/``."""
 
 from __future__ import annotations
 
@@ -8,11 +8,13 @@ from rest_framework import serializers
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
-from robot.teleop.estop import STEPS, estop_run
+from robot.api.common import error_responses, source_of
+from robot.teleop.estop import STEPS, estop_release, estop_run
+from robot.teleop.latch import alatch
 
 
 class EstopStepSerializer(serializers.Serializer):
-    step = serializers.ChoiceField(choices=[name for name, _ in STEPS])
+    step = serializers.ChoiceField(choices=["latch", *(name for name, _ in STEPS)])
     ok = serializers.BooleanField()
     detail = serializers.CharField()
 
@@ -20,23 +22,60 @@ class EstopStepSerializer(serializers.Serializer):
 class EstopOutputSerializer(serializers.Serializer):
     ok = serializers.BooleanField()
     steps = EstopStepSerializer(many=True)
+    latch = serializers.DictField(help_text="The latch as every page sees it (see GET).")
     detail = serializers.CharField(required=False, help_text="Only when a step failed.")
     code = serializers.CharField(required=False, help_text="'partial' when a step failed.")
 
 
+class LatchSerializer(serializers.Serializer):
+    latched = serializers.BooleanField()
+    by = serializers.CharField(help_text="Who pressed it.")
+    at = serializers.FloatField(help_text="When (epoch seconds).")
+    at_text = serializers.CharField()
+    message = serializers.CharField(help_text='"E-STOP engaged by NAME at TIME" while latched.')
+    steps = EstopStepSerializer(many=True, help_text="What each step of the stop did.")
+    released_by = serializers.CharField()
+    released_at = serializers.FloatField()
+
+
+class ReleaseInputSerializer(serializers.Serializer):
+    confirm = serializers.BooleanField(help_text="Must be true: releasing lets the robot be driven again.")
+
+
 class EstopView(APIView):
+
+    @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
+    def get(self, request):
+        return Response(async_to_sync(alatch)().as_msg())
 
     @extend_schema(
         request=None,
-        responses={200: EstopOutputSerializer, 502: EstopOutputSerializer},
+        responses={200: EstopOutputSerializer, 502: EstopOutputSerializer, **error_responses(401, 403)},
         summary="Emergency stop",
-        description="Zero velocity (ending any teleop), cancel all navigation goals, disable the motors and "
-        "switch to mode stop. Every step is attempted even if another fails; 502 when any step failed. "
-        "Operators and admins only.",
+        description="Latch the stop, then: zero velocity (held for a moment, further motion refused), free and "
+        "block the drive lock, cancel all navigation goals, disable the motors and switch to mode stop. Every step "
+        "is attempted even if another fails; 502 when any failed, and the latch holds either way. While latched, "
+        "driving, goals, initial pose, motors on and mode changes are refused with 409 until an operator releases "
+        "it. Operators and admins only.",
     )
     def post(self, request):
-        report = async_to_sync(estop_run)(user=request.user, source="api")
-        body = report.as_dict()
+        report = async_to_sync(estop_run)(user=request.user, source=source_of(request))
+        body = {**report.as_dict(), "latch": async_to_sync(alatch)().as_msg()}
         if not report.ok:
             body.update(detail="Emergency stop incomplete: " + report.summary(), code="partial")
         return Response(body, status=200 if report.ok else 502)
+
+
+class EstopReleaseView(APIView):
+
+    @extend_schema(
+        request=ReleaseInputSerializer,
+        responses={200: LatchSerializer, **error_responses(400, 401, 403)},
+        summary="Release the E-STOP",
+        description="An operator's explicit release, with confirm=true; audited. The motors stay off until "
+        "someone turns them on.",
+    )
+    def post(self, request):
+        confirm = request.data.get("confirm") if isinstance(request.data, dict) else None
+        latch = async_to_sync(estop_release)(user=request.user, source=source_of(request), confirm=confirm)
+        return Response(latch.as_msg())

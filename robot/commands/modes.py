@@ -35,6 +35,7 @@ from robot.commanding import Busy, arun_command
 from robot.commands.validation import clean_mode
 from robot.groups import topic_group
 from robot.state import get_store
+from robot.teleop.latch import ensure_released
 
 # Latest-state key (server-side, not a ROS topic) holding the last requested mode.
 MODE_REQUEST_KEY = "mode_request"
@@ -100,6 +101,8 @@ async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
 
     async def run() -> str:
         chosen = clean_mode(mode)
+        if chosen is not ri.Mode.STOP:
+            await ensure_released()
         async with serialised(chosen):
             by = user.get_username() if getattr(user, "is_authenticated", False) else ""
             outcome = await perform_mode(chosen, requested_by=by)

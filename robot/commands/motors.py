@@ -8,11 +8,14 @@ from robot import bus
 from robot import interface as ri
 from robot.commanding import arun_command
 from robot.commands.validation import clean_bool
+from robot.teleop.latch import ensure_released
 
 
 async def aset_motors(*, user: Any, source: str, enabled: Any) -> str:
     async def run() -> str:
         on = clean_bool(enabled, "enabled")
+        if on:
+            await ensure_released()
         key = "enable_motors" if on else "disable_motors"
         try:
             await bus.acall_service(key)

@@ -16,6 +16,7 @@ from robot import bus
 from robot import interface as ri
 from robot.commanding import arun_command
 from robot.commands import validation as v
+from robot.teleop.latch import ensure_released
 
 
 async def _send_string(
@@ -37,8 +38,13 @@ def _switch(on: Any) -> str:
 
 
 async def asend_event(*, user: Any, source: str, event: Any) -> str:
+    async def clean(value: Any) -> str:
+        event_name = v.clean_event(value)
+        await ensure_released()  # an event can start a behaviour or a demo: a mode change by another name
+        return event_name
+
     return await _send_string(user=user, source=source, action="event", field="event", value=event,
-                              key="register_event", clean=v.clean_event, outcome=lambda e: f"Sent event {e}")
+                              key="register_event", clean=clean, outcome=lambda e: f"Sent event {e}")
 
 
 async def asay(*, user: Any, source: str, text: Any) -> str:

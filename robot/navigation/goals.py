@@ -20,6 +20,7 @@ from robot.navigation.shared import GOAL_KEY, aget_state, apublish_state
 from robot.navigation.status import TERMINAL_STATES, goal_view
 from robot.navigation.transforms import normalize_angle, yaw_to_quaternion
 from robot.navigation.validation import acheck_position, audit_params, number
+from robot.teleop.latch import ensure_released
 
 # PoseWithCovarianceStamped for /initialpose: 0.5 m std-dev in x and y, 15 degrees in yaw.
 INITIAL_POSE_VAR_XY = 0.25
@@ -88,6 +89,7 @@ async def agoal_send(*, user: Any, source: str, data: dict[str, Any]) -> dict[st
     async def run() -> str:
         x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
         yaw = number(data.get("yaw"), "yaw", default=0.0)
+        await ensure_released()
         sent.update(await asend_pose_goal(user=user, x=x, y=y, yaw=yaw))
         return f"goal {sent['id']} sent to ({x:.2f}, {y:.2f}) facing {math.degrees(sent['yaw']):.0f}°"
 
@@ -122,6 +124,7 @@ async def ainitial_pose_set(*, user: Any, source: str, data: dict[str, Any]) -> 
     async def run() -> str:
         x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
         yaw = normalize_angle(number(data.get("yaw"), "yaw", default=0.0))
+        await ensure_released()
         await acheck_position(x, y, allow_unknown=True)
         await apublish("initialpose", initial_pose_message(x, y, yaw))
         pose_sent.update(x=x, y=y, yaw=yaw)

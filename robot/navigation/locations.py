@@ -14,6 +14,7 @@ from robot.navigation.goals import asend_pose_goal, astart_goal, navigation_goal
 from robot.navigation.selectors import pose_of
 from robot.navigation.shared import aget_state
 from robot.navigation.status import goal_view
+from robot.teleop.latch import ensure_released
 
 
 class LocationNotFound(RobotError):
@@ -34,6 +35,7 @@ async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
     sent: dict[str, Any] = {}
 
     async def run() -> str:
+        await ensure_released()
         location = await database_sync_to_async(Location.objects.filter(name=name).first)()
         if location is None:
             raise LocationNotFound(f"No location named {name!r}")

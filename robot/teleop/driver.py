@@ -3,7 +3,9 @@
 client → server: {"type": "input", "linear", "angular", "max_linear", "max_angular"} | "release" | "hidden"
 | "acquire" | "takeover" (admins) | "unlock"
 server → client: {"type": "lock", "holder", "you"} | {"type": "commanded", "linear", "angular"}
-| {"type": "error", "message", "code"}
+| {"type": "error", "message", "code"} | {"type": "estop", "latched", "message", "by", "at"}
+
+While the E-STOP is latched every input, lock request and takeover is refused (code "estop").
 
 Viewers may connect to see who drives; everything that would move the robot is refused.
 """
@@ -16,9 +18,10 @@ from typing import Any
 
 from django.conf import settings
 
-from robot.bus import RobotError
+from robot.bus import EstopEngaged, RobotError
 from robot.commanding import Busy, Forbidden, InvalidCommand
 from robot.teleop.driving import LockEvent, announce, lock_acquire, lock_release, lock_takeover, teleop_record
+from robot.teleop.latch import alatch
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import NotHolding, TeleopSession
 from robot.teleop.twist import Command, InvalidInput, command_from_input
@@ -41,6 +44,7 @@ class Driver:
     async def start(self) -> None:
         holder = await self.lock.holder()
         await self._send_lock(holder.username if holder else None, holder == self.me)
+        await self._send_estop(only_latched=True)
 
     async def handle(self, content: Any) -> None:
         kind = content.get("type") if isinstance(content, dict) else None
@@ -71,6 +75,8 @@ class Driver:
             self._cancel_expiry()
         self.holding = mine
         await self._send_lock(event["holder"], mine)
+        if event["reason"] in ("estop", "estop_release"):
+            await self._send_estop()
 
     # --- client messages -------------------------------------------------------------
 
@@ -83,6 +89,7 @@ class Driver:
             raise InvalidCommand(str(exc)) from None
         self._cancel_expiry()
         if not self.holding:
+            await self._refuse_if_latched()
             await self._take_free_lock()
         try:
             await self.session.drive(command)
@@ -90,6 +97,7 @@ class Driver:
             self.holding = False
             holder = await self.lock.holder()
             await self._send_lock(holder.username if holder else None, False)
+            await self._refuse_if_latched()
             raise
         if command.is_zero:
             self._watch_expiry()
@@ -127,6 +135,13 @@ class Driver:
             await self._refuse(current, Busy(f"{current.username} is driving."))
         await lock_acquire(user=self.user, me=self.me, lock=self.lock)
         self.holding = True
+
+    async def _refuse_if_latched(self) -> None:
+        """A held key keeps sending input: refuse it, audited once per E-STOP."""
+        latch = await alatch()
+        if latch.latched:
+            await self._refuse(("estop", latch.at), EstopEngaged(f"{latch.message}; driving is blocked until "
+                                                                 "an operator releases it."))
 
     async def _refuse(self, reason: object, error: RobotError) -> None:
         if self._refused != reason:
@@ -166,6 +181,12 @@ class Driver:
             await announce(None, "timeout")
             await teleop_record(user=self.user, action="teleop.unlock", params={"reason": "timeout"},
                                 outcome="drive lock freed (idle timeout)")
+
+    async def _send_estop(self, *, only_latched: bool = False) -> None:
+        latch = await alatch()
+        if latch.latched or not only_latched:
+            msg = latch.as_msg()
+            await self.send({"type": "estop", **{k: msg[k] for k in ("latched", "message", "by", "at", "at_text")}})
 
     async def _send_lock(self, holder: str | None, you: bool) -> None:
         await self.send({"type": "lock", "holder": holder, "you": you})

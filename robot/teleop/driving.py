@@ -10,8 +10,9 @@ from channels.layers import get_channel_layer
 
 from cyborg_site.roles import is_admin
 from robot.audit import audit_record
-from robot.bus import RobotError
+from robot.bus import EstopEngaged, RobotError
 from robot.commanding import Busy, arun_command
+from robot.teleop.latch import ensure_released
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import publish_cmd_vel
 from robot.teleop.twist import STOP
@@ -23,7 +24,7 @@ class LockEvent(TypedDict):
     type: Literal["teleop.lock"]
     holder: str | None  # username
     owner: str | None  # the holding connection
-    reason: str  # acquire | takeover | release | disconnect | timeout | estop
+    reason: str  # acquire | takeover | release | disconnect | timeout | estop | estop_release
 
 
 async def announce(holder: Holder | None, reason: str) -> None:
@@ -39,9 +40,11 @@ async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock
     lock = lock or get_lock()
 
     async def run() -> str:
+        await ensure_released()
         current = await lock.acquire(me)
         if current != me:
             raise Busy(f"{current.username} is driving.")
+        await _give_back_if_latched(lock, me)
         await announce(me, "acquire")
         return "drive lock taken"
 
@@ -56,7 +59,9 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
 
     async def run() -> str:
         nonlocal previous
+        await ensure_released()
         previous = await lock.take(me)
+        await _give_back_if_latched(lock, me)
         await announce(me, "takeover")
         if previous is None or previous == me:
             return "drive lock taken (it was free)"
@@ -68,6 +73,15 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
 
     await arun_command(user=user, source=source, action="teleop.takeover", params={}, run=run, allowed=is_admin)
     return me
+
+
+async def _give_back_if_latched(lock: DriveLock, me: Holder) -> None:
+    """An E-STOP pressed while we took the lock: its own clear may have run before our take."""
+    try:
+        await ensure_released()
+    except EstopEngaged:
+        await lock.release(me)
+        raise
 
 
 async def lock_release(*, user: Any, me: Holder, reason: str, source: str = "websocket",

@@ -1,6 +1,7 @@
-"""The emergency stop: zero velocity (ending any teleop), cancel navigation goals, disable
-the motors, mode stop. Every step is tried even when another fails; each result is
-reported and the whole is audited."""
+"""The emergency stop: latch it, zero velocity (ending any teleop), cancel navigation goals,
+disable the motors, mode stop. Every step is tried even when another fails; each result is
+reported, kept with the latch for every page to see, and the whole is audited. The latch
+holds until an operator releases it (``estop_release``)."""
 
 from __future__ import annotations
 
@@ -11,14 +12,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
-from robot.bus import RobotError, acall_service
-from robot.commanding import arun_command
+from robot.bus import RobotError, acall_service, arequest
+from robot.commanding import InvalidCommand, arun_command
 from robot.commands.modes import perform_mode
 from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
+from robot.teleop.latch import Latch, aengage, alatch, arecord_steps, arelease
 from robot.teleop.lock import get_lock
-from robot.teleop.session import publish_cmd_vel
-from robot.teleop.twist import STOP
 
 log = logging.getLogger(__name__)
 
@@ -57,16 +57,17 @@ class EstopIncomplete(RobotError):
 
 
 async def _zero_velocity(by: str) -> str:
-    # Free the lock first: every teleop loop's next refresh fails, and the announcement stops
-    # the loops at once, so no driver's Twist follows our zero.
-    try:
-        previous = await get_lock().clear()
-        await announce(None, "estop")
-    except Exception:  # the zero Twist matters more than the lock bookkeeping
-        log.exception("e-stop could not clear the drive lock")
-        previous = None
-    await publish_cmd_vel(STOP)
-    return f"zero Twist sent; {previous.username} stopped driving" if previous else "zero Twist sent"
+    # The link publishes zero now and for a short hold, and refuses motion until released.
+    await arequest("estop", timeout=STEP_TIMEOUT_S)
+    return "zero Twist sent and held"
+
+
+async def _block_driving(by: str) -> str:
+    """Free the drive lock: every teleop loop's next refresh fails and the announcement stops
+    them at once; the latch refuses the lock to anyone until it is released."""
+    previous = await get_lock().clear()
+    await announce(None, "estop")
+    return f"{previous.username} stopped driving" if previous else "nobody was driving"
 
 
 async def _cancel_navigation(by: str) -> str:
@@ -89,6 +90,7 @@ async def _mode_stop(by: str) -> str:
 Step = Callable[[str], Awaitable[str]]
 STEPS: tuple[tuple[str, Step], ...] = (
     ("zero_velocity", _zero_velocity),
+    ("drive_lock", _block_driving),
     ("cancel_navigation", _cancel_navigation),
     ("disable_motors", _disable_motors),
     ("mode_stop", _mode_stop),
@@ -108,20 +110,36 @@ async def _attempt(name: str, step: Step, by: str) -> StepResult:
 
 
 async def estop_steps(*, by: str = "") -> EstopReport:
-    """All four steps: the zero Twist first (fastest), then the rest side by side."""
-    (first_name, first), rest = STEPS[0], STEPS[1:]
-    head = await _attempt(first_name, first, by)
-    tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in rest))
-    return EstopReport((head, *tail))
+    """Latch, then every step: the zero Twist first (fastest), then the rest side by side."""
+    zero = asyncio.ensure_future(_attempt(*STEPS[0], by))
+    latched = await _attempt("latch", _latch, by)
+    head = await zero
+    tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in STEPS[1:]))
+    report = EstopReport((latched, head, *tail))
+    if latched.ok:
+        try:
+            await arecord_steps(await alatch(), report.as_dict()["steps"])
+        except Exception:
+            log.exception("could not keep the e-stop's step results with the latch")
+    return report
+
+
+async def _latch(by: str) -> str:
+    engaged = await aengage(by=by)
+    return engaged.message
+
+
+def _username(user: Any) -> str:
+    return user.get_username() if getattr(user, "is_authenticated", False) else ""
 
 
 async def estop_run(*, user: Any, source: str) -> EstopReport:
-    """Role check, the four steps, one audit entry; Forbidden for viewers."""
+    """Role check, latch and steps, one audit entry; Forbidden for viewers."""
     report: EstopReport | None = None
 
     async def run() -> str:
         nonlocal report
-        report = await estop_steps(by=user.get_username() if getattr(user, "is_authenticated", False) else "")
+        report = await estop_steps(by=_username(user))
         if not report.ok:
             raise EstopIncomplete(report)
         return report.summary()
@@ -132,3 +150,29 @@ async def estop_run(*, user: Any, source: str) -> EstopReport:
         return exc.report
     assert report is not None
     return report
+
+
+async def estop_release(*, user: Any, source: str, confirm: Any) -> Latch:
+    """An operator's explicit, confirmed release: motion commands are accepted again
+    (the motors stay off until someone turns them on)."""
+    released: Latch | None = None
+
+    async def run() -> str:
+        nonlocal released
+        if confirm is not True:
+            raise InvalidCommand("Confirm the release: send confirm=true.", field="confirm")
+        current = await alatch()
+        released = await arelease(by=_username(user))
+        try:
+            await arequest("estop_release", timeout=STEP_TIMEOUT_S)
+        except RobotError as exc:
+            # The link reads the latch from the shared store every few seconds and follows.
+            log.warning("the link did not take the e-stop release at once: %s", exc.message)
+        await announce(None, "estop_release")
+        if not current.latched:
+            return "E-STOP was not engaged"
+        return f"E-STOP released ({current.message})"
+
+    await arun_command(user=user, source=source, action="estop.release", params={"confirm": confirm}, run=run)
+    assert released is not None
+    return released

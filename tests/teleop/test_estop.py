@@ -13,7 +13,7 @@ from tests.teleop.support import drive_socket, is_moving, is_zero, key, lock_fra
 # The API runs the async service from a sync view: database_sync_to_async closes the
 # connection a plain test transaction lives on (PostgreSQL), so these tests commit.
 pytestmark = pytest.mark.django_db(transaction=True)
-STEPS = ["zero_velocity", "cancel_navigation", "disable_motors", "mode_stop"]
+STEPS = ["latch", "zero_velocity", "drive_lock", "cancel_navigation", "disable_motors", "mode_stop"]
 STAGE_GOAL = {"header": {"frame_id": ri.MAP_FRAME},
               "pose": {"position": {"x": 6.5, "y": -1.0, "z": 0.0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}}}
 
@@ -54,10 +54,17 @@ def test_it_tries_every_step_and_reports_each_when_the_robot_is_offline(operator
     body = response.json()
     assert body["ok"] is False and body["code"] == "partial"
     assert [s["step"] for s in body["steps"]] == STEPS
-    assert not any(s["ok"] for s in body["steps"])
-    assert all("offline" in s["detail"].lower() for s in body["steps"]), body["steps"]
+    robot_steps = [s for s in body["steps"] if s["step"] not in ("latch", "drive_lock")]
+    assert not any(s["ok"] for s in robot_steps)
+    assert all("offline" in s["detail"].lower() for s in robot_steps), body["steps"]
     entry = AuditEntry.objects.get(action="estop")
     assert entry.ok is False and entry.error_code == "partial"
+    # The latch holds all the same, and every page can see which steps failed.
+    latch = operator_api.get("/api/robot/estop/").json()
+    assert latch["latched"] is True and latch["by"] == "otto"
+    assert {s["step"] for s in latch["steps"] if not s["ok"]} == {s["step"] for s in robot_steps}
+    refused = operator_api.post("/api/robot/motors/", {"enabled": True}, format="json")
+    assert refused.status_code == 409 and refused.json()["detail"].startswith("E-STOP engaged by otto at ")
 
 
 def test_it_refuses_viewers_and_anonymous_callers(viewer_api, anon_api, sim, link_thread):
@@ -84,7 +91,7 @@ async def test_it_ends_the_active_teleop_session_and_frees_the_lock(link, sim, o
     await ws.send_json_to(key(1.0))
     await wait_twist(sim, is_moving)
     report = await estop_run(user=operator, source="page")
-    assert report.steps[0].ok and "otto stopped driving" in report.steps[0].detail
+    assert report.steps[2].ok and "otto stopped driving" in report.steps[2].detail
     await lock_frame(ws, lambda f: f["holder"] is None and not f["you"])
     assert await get_lock().holder() is None
     count = len(await twists(sim))

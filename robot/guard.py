@@ -1,0 +1,108 @@
+"""The last word on ``cmd_vel``, kept by the process that publishes it (the robot link).
+
+- Deadman: a moving Twist must be followed by another within ``deadman_s``; when the stream
+  goes quiet (a web process died, a driver's loop stalled) the guard publishes zero itself.
+- E-STOP: once engaged it publishes zero at once and again at the teleop rate for a short
+  hold, and refuses every non-zero Twist until released.
+- Stop: a link that shuts down while the robot moves sends zero first.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Callable
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+# The latest-state key of the E-STOP latch (written by robot.teleop.latch, read here too).
+LATCH_KEY = "estop"
+
+
+def is_zero_twist(msg: dict[str, Any]) -> bool:
+    parts = (msg.get("linear") or {}, msg.get("angular") or {})
+    return all(float(part.get(axis) or 0.0) == 0.0 for part in parts for axis in ("x", "y", "z"))
+
+
+class CmdVelGuard:
+    def __init__(
+        self,
+        publish_zero: Callable[[], None],
+        *,
+        loop: asyncio.AbstractEventLoop,
+        rate_hz: float,
+        hold_s: float,
+        deadman_s: float,
+    ) -> None:
+        self._publish_zero = publish_zero
+        self._loop = loop
+        self.period = 1.0 / rate_hz
+        self.hold_s = hold_s
+        self.deadman_s = deadman_s
+        self.latched = False
+        self.moving = False  # the last Twist that went out was non-zero
+        self._deadman: asyncio.TimerHandle | None = None
+        self._hold: asyncio.Task | None = None
+
+    def check(self, msg: dict[str, Any]) -> str | None:
+        """Before a Twist goes out: a refusal message, or None (and the deadman is re-armed)."""
+        zero = is_zero_twist(msg)
+        if self.latched and not zero:
+            return "E-STOP engaged: motion refused until an operator releases it"
+        self.moving = not zero
+        self._disarm()
+        if self.moving:
+            self._deadman = self._loop.call_later(self.deadman_s, self._quiet)
+        return None
+
+    def engage(self) -> None:
+        """Zero now, zero at the teleop rate for the hold, refuse motion from here on."""
+        self.latched = True
+        self._zero()
+        if self._hold is None or self._hold.done():
+            self._hold = self._loop.create_task(self._hold_zero())
+
+    def release(self) -> None:
+        self.latched = False
+
+    def sync(self, latched: bool) -> None:
+        """The shared store's view (a press or release made while this link was unreachable)."""
+        if latched and not self.latched:
+            log.warning("E-STOP latched in the shared store: engaging here too")
+            self.engage()
+        elif not latched and self.latched:
+            log.info("E-STOP released in the shared store")
+            self.release()
+
+    def stop(self) -> None:
+        """The link is shutting down: zero if the robot may be moving, and no timers left."""
+        if self.moving:
+            self._zero()
+        self._disarm()
+        if self._hold is not None:
+            self._hold.cancel()
+
+    def _zero(self) -> None:
+        self._disarm()
+        self.moving = False
+        try:
+            self._publish_zero()
+        except Exception as exc:
+            log.warning("could not publish a zero Twist: %s", exc)
+
+    def _disarm(self) -> None:
+        if self._deadman is not None:
+            self._deadman.cancel()
+            self._deadman = None
+
+    def _quiet(self) -> None:
+        self._deadman = None
+        log.warning("cmd_vel went quiet for %.2f s while moving: publishing zero", self.deadman_s)
+        self._zero()
+
+    async def _hold_zero(self) -> None:
+        end = self._loop.time() + self.hold_s
+        while self._loop.time() < end:
+            await asyncio.sleep(self.period)
+            self._zero()

@@ -1,0 +1,115 @@
+"""The E-STOP latch: once engaged it holds, in every process, until an operator releases it.
+
+The latch is one key of the shared latest-state store (in-process in the embedded default,
+Redis when scaled), so every web process and the link see the same answer, and pages get
+it on the live socket like any other key. While it is engaged, everything that could make
+the robot move is refused with ``EstopEngaged`` (409).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from typing import Any
+
+from django.conf import settings
+from django.utils import timezone
+
+from robot.bus import EstopEngaged
+from robot.guard import LATCH_KEY
+from robot.navigation.shared import apublish_state
+from robot.state import get_store
+
+__all__ = ["LATCH_KEY", "EstopEngaged", "Latch"]
+
+
+@dataclass(frozen=True)
+class Latch:
+    latched: bool
+    by: str = ""
+    at: float = 0.0  # epoch seconds of the press
+    steps: list[dict[str, Any]] = field(default_factory=list)  # each {step, ok, detail}; empty while running
+    released_by: str = ""
+    released_at: float = 0.0
+
+    @property
+    def message(self) -> str:
+        return f"E-STOP engaged by {self.by or 'an unknown user'} at {format_time(self.at)}"
+
+    @property
+    def failed_steps(self) -> list[dict[str, Any]]:
+        return [s for s in self.steps if not s.get("ok")]
+
+    def as_msg(self) -> dict[str, Any]:
+        return {
+            "latched": self.latched, "by": self.by, "at": self.at, "at_text": format_time(self.at) if self.at else "",
+            "message": self.message if self.latched else "", "steps": self.steps,
+            "released_by": self.released_by, "released_at": self.released_at,
+        }
+
+    @classmethod
+    def from_msg(cls, msg: dict[str, Any] | None) -> Latch:
+        if not msg:
+            return RELEASED
+        return cls(
+            latched=bool(msg.get("latched")), by=str(msg.get("by") or ""), at=float(msg.get("at") or 0),
+            steps=list(msg.get("steps") or []), released_by=str(msg.get("released_by") or ""),
+            released_at=float(msg.get("released_at") or 0),
+        )
+
+
+RELEASED = Latch(latched=False)
+
+
+def format_time(t: float) -> str:
+    moment = datetime.fromtimestamp(t, tz=UTC)
+    if settings.USE_TZ:
+        moment = timezone.localtime(moment)
+    return moment.strftime("%Y-%m-%d %H:%M:%S %Z").strip()
+
+
+async def alatch() -> Latch:
+    entry = (await get_store().aget_many([LATCH_KEY])).get(LATCH_KEY)
+    return Latch.from_msg(entry.get("msg") if entry else None)
+
+
+def latch() -> Latch:
+    """The latch from synchronous code (page rendering)."""
+    entry = get_store().get_all().get(LATCH_KEY)
+    return Latch.from_msg(entry.get("msg") if entry else None)
+
+
+async def ensure_released() -> None:
+    """Raise ``EstopEngaged`` while the E-STOP is latched (call before anything that moves the robot)."""
+    current = await alatch()
+    if current.latched:
+        raise EstopEngaged(f"{current.message}; an operator must release it first.")
+
+
+async def aengage(*, by: str) -> Latch:
+    """Latch the stop (a press while latched keeps the first press's who and when)."""
+    current = await alatch()
+    if current.latched:
+        return current
+    engaged = Latch(latched=True, by=by, at=time.time())
+    await apublish_state(LATCH_KEY, engaged.as_msg())
+    return engaged
+
+
+async def arecord_steps(engaged: Latch, steps: list[dict[str, Any]]) -> Latch:
+    """Keep what each stop step did with the latch, so every page can show a failure."""
+    current = await alatch()
+    if not current.latched or current.at != engaged.at:
+        return current  # released (or re-engaged) meanwhile: that newer state wins
+    updated = Latch(latched=True, by=current.by, at=current.at, steps=steps)
+    await apublish_state(LATCH_KEY, updated.as_msg())
+    return updated
+
+
+async def arelease(*, by: str) -> Latch:
+    current = await alatch()
+    released = Latch(latched=False, by=current.by, at=current.at, steps=current.steps,
+                     released_by=by, released_at=time.time())
+    await apublish_state(LATCH_KEY, released.as_msg())
+    return released
