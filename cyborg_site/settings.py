@@ -80,6 +80,7 @@ TEMPLATES = [
                 "django.contrib.messages.context_processors.messages",
                 "dashboard.context_processors.roles",
                 "dashboard.context_processors.site_config",
+                "dashboard.context_processors.estop",
             ],
         },
     },

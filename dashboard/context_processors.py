@@ -3,6 +3,7 @@ from django.urls import reverse
 
 from cyborg_site.roles import is_admin, is_operator, role_of
 from dashboard.routing import LIVE_SOCKET_PATH
+from robot.teleop.latch import latch
 
 # The command API views the pages' command buttons post to, by their data-command name.
 COMMAND_NAMES = ("mode", "event", "speech", "emotion", "emotion-system", "motors", "playback", "dome")
@@ -18,6 +19,13 @@ def roles(request):
     }
 
 
+def estop(request):
+    """The E-STOP latch, so a page opened while it holds shows the banner from the start."""
+    if not getattr(getattr(request, "user", None), "is_authenticated", False):
+        return {}
+    return {"estop": latch()}
+
+
 def site_config(request):
     """What every page's scripts read from base.html's "site-config": URLs and the time policy."""
     return {
@@ -27,6 +35,7 @@ def site_config(request):
                 "live_socket": LIVE_SOCKET_PATH,
                 "login": reverse("login"),
                 "estop": reverse("robot-estop"),
+                "estop_release": reverse("robot-estop-release"),
             },
             "commands": {name: reverse(f"api-robot-{name}") for name in COMMAND_NAMES},
         },

@@ -8,11 +8,12 @@ from robot import interface as ri
 from robot.commands.modes import MODE_REQUEST_KEY
 from robot.navigation.shared import SERVER_KEYS as NAVIGATION_KEYS
 from robot.state import status_view
+from robot.teleop.latch import LATCH_KEY
 
 # Whole occupancy grids are far too big for a browser socket; the map page gets an image.
 _BULKY_TYPES = {"nav_msgs/OccupancyGrid"}
 # Keys the server itself writes to the latest-state store (not ROS topics), same frames.
-SERVER_KEYS = frozenset({MODE_REQUEST_KEY, *NAVIGATION_KEYS})
+SERVER_KEYS = frozenset({MODE_REQUEST_KEY, LATCH_KEY, *NAVIGATION_KEYS})
 
 
 def watchable_keys() -> set[str]:

@@ -73,6 +73,8 @@ class Driver:
         if self.holding and not mine:
             self.session.lost()
             self._cancel_expiry()
+            if event["reason"] == "estop":  # the stop published zero for us
+                await self.send({"type": "commanded", "linear": 0.0, "angular": 0.0, "reason": "estop"})
         self.holding = mine
         await self._send_lock(event["holder"], mine)
         if event["reason"] in ("estop", "estop_release"):

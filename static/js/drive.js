@@ -64,6 +64,7 @@ startCamera();
 
 // --- teleop socket ----------------------------------------------------------------------
 const lock = { holder: null, you: false };
+let estop = null; // the E-STOP message while it is latched: no input is sent
 let ws = null;
 let wsDelay = 500;
 let lastError = { message: "", at: 0 };
@@ -83,12 +84,15 @@ function renderLock() {
   const el = $("lock-state");
   el.dataset.holder = lock.holder || "";
   el.dataset.you = String(lock.you);
-  el.textContent = lock.you ? "You are driving" : lock.holder ? `${lock.holder} is driving` : "Nobody is driving";
+  el.textContent = estop ? `Stopped: ${estop}` : lock.you ? "You are driving"
+    : lock.holder ? `${lock.holder} is driving` : "Nobody is driving";
+  el.dataset.estop = String(!!estop);
+  el.classList.toggle("lock-estop", !!estop);
   el.classList.toggle("lock-you", lock.you);
   el.classList.toggle("lock-other", !lock.you && !!lock.holder);
   card.classList.toggle("locked-out", !lock.you && !!lock.holder);
   const show = (id, on) => { const b = $(id); if (b) b.hidden = !on; };
-  show("lock-acquire", canDrive && !lock.you && !lock.holder);
+  show("lock-acquire", canDrive && !estop && !lock.you && !lock.holder);
   show("lock-release", lock.you);
   show("lock-takeover", canTakeover && !lock.you && !!lock.holder);
 }
@@ -99,6 +103,18 @@ function setCommanded(linear, angular) {
   el.textContent = `${fmt(linear)} m/s · ${fmt(angular)} rad/s`;
 }
 
+// An E-STOP stops this page's input at once, whatever the hands still do, and says why.
+function onEstop(frame) {
+  estop = frame.latched ? frame.message : null;
+  if (estop) {
+    keys.clear();
+    Object.assign(stick, { active: false, x: 0, y: 0 });
+    stopInput("release");
+    setCommanded(0, 0);
+  }
+  renderLock();
+}
+
 function openSocket() {
   ws = new WebSocket(socketURL(config.teleop_socket));
   ws.onopen = () => { wsDelay = 500; card.classList.remove("offline"); };
@@ -106,6 +122,7 @@ function openSocket() {
     const frame = JSON.parse(ev.data);
     if (frame.type === "lock") { Object.assign(lock, { holder: frame.holder, you: frame.you }); renderLock(); }
     else if (frame.type === "commanded") setCommanded(frame.linear, frame.angular);
+    else if (frame.type === "estop") onEstop(frame);
     else if (frame.type === "error") showError(frame.message);
   };
   ws.onclose = (ev) => {
@@ -149,6 +166,7 @@ function inputChanged() {
   const input = currentInput();
   const moving = input.linear !== 0 || input.angular !== 0;
   if (moving) {
+    if (estop) { showError(`${estop} — driving is blocked until an operator releases it.`); return; }
     if (lock.holder && !lock.you) { showError(`${lock.holder} is driving.`); return; }
     if (input.linear !== lastSent.linear || input.angular !== lastSent.angular || !sending) send(inputFrame(input));
     lastSent = input;

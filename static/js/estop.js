@@ -1,19 +1,60 @@
-// The emergency stop button in every page's header (operators and admins).
+// The E-STOP on every page: the button (operators), the Esc shortcut, and the banner every
+// user sees while the stop is latched (who, when, which step failed), with the release.
 import { notify, postJSON } from "./api.js";
 import { site } from "./config.js";
+import { live } from "./live.js";
 
 const button = document.getElementById("estop-btn");
-button?.addEventListener("click", async () => {
-  button.disabled = true;
+const banner = document.getElementById("estop-banner");
+const release = document.getElementById("estop-release");
+const SHORTCUT = "Escape";
+
+function render(latch) {
+  if (!banner || !latch) return;
+  banner.hidden = !latch.latched;
+  banner.dataset.latched = String(!!latch.latched);
+  banner.dataset.by = latch.by || "";
+  document.getElementById("estop-banner-text").textContent = latch.latched ? latch.message : "";
+  const failed = (latch.steps || []).filter((s) => !s.ok);
+  document.getElementById("estop-banner-failed").textContent = latch.latched && failed.length
+    ? `Failed: ${failed.map((s) => `${s.step} (${s.detail})`).join("; ")}` : "";
+}
+
+async function engage() {
+  if (!button) { notify("Only operators and admins can press the E-STOP.", "error"); return; }
+  button.setAttribute("aria-busy", "true");
   try {
     const report = await postJSON(site.urls.estop);
-    notify("Emergency stop: velocity zero, navigation cancelled, motors disabled, mode stop.", "warn", { timeout: 10000 });
-    button.dataset.result = report.ok ? "ok" : "partial";
+    render(report.latch);
+    button.dataset.result = "ok";
   } catch (err) {
-    const steps = err.data?.steps?.map((s) => `${s.step}: ${s.ok ? "ok" : s.detail}`).join("; ");
-    notify(steps ? `Emergency stop incomplete — ${steps}` : `Emergency stop failed: ${err.message}`, "error", { timeout: 0 });
-    button.dataset.result = "failed";
+    // A failing step still latches: the banner shows which one.
+    if (err.data?.latch) render(err.data.latch);
+    const steps = err.data?.steps?.filter((s) => !s.ok).map((s) => `${s.step}: ${s.detail}`).join("; ");
+    notify(steps ? `E-STOP latched, but not every step succeeded — ${steps}` : `E-STOP failed: ${err.message}`, "error",
+      { timeout: 0 });
+    button.dataset.result = err.data?.latch?.latched ? "partial" : "failed";
   } finally {
-    button.disabled = false;
+    button.removeAttribute("aria-busy");
+  }
+}
+
+// Never disabled while a press is under way: pressing again is always allowed.
+button?.addEventListener("click", engage);
+document.addEventListener("keydown", (ev) => {
+  if (ev.key !== SHORTCUT || ev.repeat) return;
+  ev.preventDefault();
+  engage();
+}, { capture: true });
+
+release?.addEventListener("click", async () => {
+  if (!confirm("Release the E-STOP? Driving, goals and mode changes are allowed again (the motors stay off).")) return;
+  try {
+    render(await postJSON(site.urls.estop_release, { confirm: true }));
+    notify("E-STOP released.", "ok");
+  } catch (err) {
+    notify(`E-STOP not released: ${err.message}`, "error");
   }
 });
+
+live.watch(["estop"], (frame) => render(frame.msg));
