@@ -135,7 +135,9 @@ if REDIS_URL:
         "default": {
             "BACKEND": "channels_redis.core.RedisChannelLayer",
             "CONFIG": {
-                "hosts": [REDIS_URL],
+                # redis-py 8 times socket reads out after 5 s by default, exactly the layer's blocking
+                # receive (BZPOPMIN, 5 s): a quiet channel then raised TimeoutError out of receive().
+                "hosts": [{"address": REDIS_URL, "socket_timeout": 15, "socket_connect_timeout": 2}],
                 "prefix": env_str("CHANNEL_LAYER_PREFIX", "cyborg"),
                 "capacity": 200,
                 "expiry": 10,
@@ -205,6 +207,8 @@ HISTORY_BUFFER_ROWS = env_int("HISTORY_BUFFER_ROWS", 200_000, minimum=1)
 HISTORY_BATCH_WRITER = env_choice("HISTORY_BATCH_WRITER", "thread", ("thread", "celery"))
 HISTORY_POLICY_RELOAD_S = env_float("HISTORY_POLICY_RELOAD_S", 1.0, minimum=0.05)
 HISTORY_SAMPLE_TICK_S = env_float("HISTORY_SAMPLE_TICK_S", 1.0, minimum=0.05)
+# Periodic samples kept per topic for a sampler that was down (a Celery worker outage) to catch up on.
+HISTORY_BACKLOG_SAMPLES = env_int("HISTORY_BACKLOG_SAMPLES", 2000, minimum=1)
 HISTORY_PRUNE_EVERY_S = env_float("HISTORY_PRUNE_EVERY_S", 300.0, minimum=1)
 HISTORY_MAX_POINTS = env_int("HISTORY_MAX_POINTS", 2000, minimum=10)
 CELERY_BEAT_SCHEDULE = {

@@ -6,6 +6,7 @@
 #   scripts/stack.sh up      start everything, wait until the robot is live through nginx
 #   scripts/stack.sh down    stop exactly what `up` started (pid files in $STACK_DIR/pids)
 #   scripts/stack.sh status  which of its processes are running
+#   scripts/stack.sh restart NAME...   stop and start some (sim link-a link-b web-a web-b worker beat nginx)
 #
 # Settings (environment): STACK_DIR (var/stack), STACK_HTTPS_PORT (8443), STACK_HTTP_PORT (8480),
 # STACK_WEB_PORTS ("8401 8402"), STACK_SIM_PORT (9490), STACK_VIDEO_PORT (8490),
@@ -69,6 +70,44 @@ start() {
   local name=$1; shift
   (set -a; . "$ENV_FILE"; set +a; exec setsid "$@" >>"$LOGS/$name.log" 2>&1 </dev/null) &
   echo $! >"$PIDS/$name.pid"
+}
+
+# Every process of the stack, in start order.
+names() {
+  if [[ -z "${ROSBRIDGE_URL:-}" ]]; then echo sim; fi
+  echo link-a link-b web-a web-b worker beat nginx
+}
+
+launch() {
+  case $1 in
+    sim) start sim "$BIN/python" manage.py simrobot --port "$SIM_PORT" --video-port "$VIDEO_PORT" ;;
+    link-a | link-b) start "$1" env ROBOT_LINK_NAME="$1" "$BIN/python" manage.py robotlink ;;
+    web-a) start web-a "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_A" cyborg_site.asgi:application ;;
+    web-b) start web-b "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_B" cyborg_site.asgi:application ;;
+    worker) start worker "$BIN/celery" -A cyborg_site worker --loglevel=INFO --concurrency=1 --without-gossip \
+              --without-mingle ;;
+    beat) start beat "$BIN/celery" -A cyborg_site beat --loglevel=INFO --schedule="$STACK_DIR/var/celerybeat-schedule" ;;
+    nginx) start nginx "$NGINX" -e "$LOGS/nginx-error.log" -p "$STACK_DIR/nginx" -c "$STACK_DIR/nginx/nginx.conf" \
+             -g "daemon off;" ;;
+    *) say "no process called $1 (one of: $(names | tr '\n' ' '))"; exit 2 ;;
+  esac
+}
+
+# Stop the named processes (SIGTERM, then SIGKILL after 10 s) and forget their pid files.
+stop() {
+  local name pid
+  for name in "$@"; do
+    [[ -f $PIDS/$name.pid ]] || continue
+    pid=$(<"$PIDS/$name.pid")
+    if ours "$pid"; then kill -TERM -- "-$pid" 2>/dev/null || kill -TERM "$pid" 2>/dev/null || true; fi
+  done
+  for name in "$@"; do
+    [[ -f $PIDS/$name.pid ]] || continue
+    pid=$(<"$PIDS/$name.pid")
+    for _ in $(seq 100); do ours "$pid" || break; sleep 0.1; done
+    if ours "$pid"; then say "$name ($pid) ignored SIGTERM; killing it"; kill -KILL -- "-$pid" 2>/dev/null || true; fi
+    rm -f "$PIDS/$name.pid"
+  done
 }
 
 ours() {  # pid: is it alive and one of this stack's processes? (nginx rewrites its environment block)
@@ -143,16 +182,7 @@ up() {
   in_env "$BIN/python" manage.py collectstatic --noinput >>"$LOGS/setup.log"
   in_env "$BIN/python" manage.py bootstrap >>"$LOGS/setup.log"
   write_nginx
-  if [[ -z "${ROSBRIDGE_URL:-}" ]]; then
-    start sim "$BIN/python" manage.py simrobot --port "$SIM_PORT" --video-port "$VIDEO_PORT"
-  fi
-  start link-a env ROBOT_LINK_NAME=link-a "$BIN/python" manage.py robotlink
-  start link-b env ROBOT_LINK_NAME=link-b "$BIN/python" manage.py robotlink
-  start web-a "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_A" cyborg_site.asgi:application
-  start web-b "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_B" cyborg_site.asgi:application
-  start worker "$BIN/celery" -A cyborg_site worker --loglevel=INFO --concurrency=1 --without-gossip --without-mingle
-  start beat "$BIN/celery" -A cyborg_site beat --loglevel=INFO --schedule="$STACK_DIR/var/celerybeat-schedule"
-  start nginx "$NGINX" -e "$LOGS/nginx-error.log" -p "$STACK_DIR/nginx" -c "$STACK_DIR/nginx/nginx.conf" -g "daemon off;"
+  for name in $(names); do launch "$name"; done
   if [[ -z "${ROSBRIDGE_URL:-}" ]]; then wait_port "$SIM_PORT" 30 simulator; fi
   wait_port "$WEB_A" 60 web-a
   wait_port "$WEB_B" 60 web-b
@@ -166,24 +196,20 @@ up() {
 }
 
 down() {
-  local pidfile pid name
   [[ -d $PIDS ]] || { say "nothing to stop in $STACK_DIR"; return 0; }
   # The front first (no new work), the links last (they release the lease and flush history).
-  for name in nginx web-a web-b beat worker link-b link-a sim; do
-    pidfile=$PIDS/$name.pid
-    [[ -f $pidfile ]] || continue
-    pid=$(<"$pidfile")
-    if ours "$pid"; then kill -TERM -- "-$pid" 2>/dev/null || kill -TERM "$pid" 2>/dev/null || true; fi
-  done
-  for name in nginx web-a web-b beat worker link-b link-a sim; do
-    pidfile=$PIDS/$name.pid
-    [[ -f $pidfile ]] || continue
-    pid=$(<"$pidfile")
-    for _ in $(seq 100); do ours "$pid" || break; sleep 0.1; done
-    if ours "$pid"; then say "$name ($pid) ignored SIGTERM; killing it"; kill -KILL -- "-$pid" 2>/dev/null || true; fi
-    rm -f "$pidfile"
-  done
+  stop nginx web-a web-b beat worker link-b link-a sim
   say "down"
+}
+
+# Rolling restarts, and bringing back a process a test killed: stop (if running) and start again.
+restart() {
+  local name
+  [[ -f $ENV_FILE ]] || { say "not up in $STACK_DIR"; exit 1; }
+  for name in "$@"; do
+    stop "$name"
+    launch "$name"
+  done
 }
 
 status() {
@@ -199,5 +225,6 @@ case "${1:-}" in
   up) up ;;
   down) down ;;
   status) status ;;
-  *) echo "usage: $0 up|down|status" >&2; exit 2 ;;
+  restart) shift; restart "$@" ;;
+  *) echo "usage: $0 up|down|status|restart NAME..." >&2; exit 2 ;;
 esac

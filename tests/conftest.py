@@ -19,7 +19,7 @@ PASSWORD = "correct-horse-battery"
 def pytest_collection_modifyitems(config, items):
     """Browser tests last: Playwright's sync API leaves an event loop running in the main
     thread, which async tests after it cannot share."""
-    items.sort(key=lambda item: item.get_closest_marker("browser") is not None)
+    items.sort(key=lambda item: any(item.get_closest_marker(m) is not None for m in ("browser", "stack")))
 
 
 # --- users by role -----------------------------------------------------------------------

@@ -38,7 +38,9 @@ def test_it_wires_redis_and_postgres_from_urls(monkeypatch, tmp_path):
     assert s["EMBEDDED"] is False
     layer = s["CHANNEL_LAYERS"]["default"]
     assert layer["BACKEND"] == "channels_redis.core.RedisChannelLayer"
-    assert layer["CONFIG"]["hosts"] == ["redis://127.0.0.1:6379/3"]
+    assert [h["address"] for h in layer["CONFIG"]["hosts"]] == ["redis://127.0.0.1:6379/3"]
+    # Longer than the layer's blocking receive (5 s), or a quiet channel's receive() raises.
+    assert layer["CONFIG"]["hosts"][0]["socket_timeout"] > 5
     assert s["CELERY_BROKER_URL"] == "redis://127.0.0.1:6379/3"
     assert s["DATABASES"]["default"]["ENGINE"] == "django.db.backends.postgresql"
     assert s["ROSBRIDGE_URL"] == "wss://cyborg.example:9090"
