@@ -59,6 +59,17 @@ def env_list(name: str, default: list[str]) -> list[str]:
     return [item.strip() for item in raw.split(",") if item.strip()]
 
 
+def env_pair(name: str) -> tuple[str, str] | None:
+    """``HEADER,value`` (e.g. ``HTTP_X_FORWARDED_PROTO,https``) as a pair, or None when unset."""
+    raw = os.environ.get(name)
+    if not raw:
+        return None
+    parts = [part.strip() for part in raw.split(",")]
+    if len(parts) != 2 or not all(parts):
+        raise EnvError(f"{name} must be 'HEADER,value' (e.g. HTTP_X_FORWARDED_PROTO,https), got {raw!r}")
+    return parts[0], parts[1]
+
+
 def env_json_dict(name: str) -> dict:
     raw = os.environ.get(name)
     if not raw:

@@ -65,7 +65,8 @@ def topics_view(request: Request) -> Response:
     return Response(_policies())
 
 
-@extend_schema(request=s.DiscoverIn, summary="Add a policy for every topic the robot reports (/rosapi/topics)")
+@extend_schema(request=s.DiscoverIn, responses={200: s.DiscoverOut},
+               summary="Add a policy for every topic the robot reports (/rosapi/topics)")
 @api_view(["POST"])
 @permission_classes([permissions.IsAuthenticated, AdminWrites])
 def discover_view(request: Request) -> Response:
@@ -124,13 +125,14 @@ async def _async_chunks(chunks):
         yield chunk
 
 
-@extend_schema(summary="Recorded topics with their plottable fields")
+@extend_schema(responses={200: s.RecordedOut}, summary="Recorded topics with their plottable fields")
 @api_view(["GET"])
 def recorded_view(request: Request) -> Response:
     return Response({"topics": recorded_topics()})
 
 
-@extend_schema(summary="Time spent per state-machine state, from recorded state changes")
+@extend_schema(parameters=[s.TimelineIn], responses={200: s.TimelineOut},
+               summary="Time spent per state-machine state, from recorded state changes")
 @api_view(["GET"])
 def timeline_view(request: Request) -> Response:
     q = s.RangeIn(data={**request.query_params.dict(), "topic": ri.topic("state_change").name})

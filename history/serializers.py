@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from datetime import datetime, timedelta
 
@@ -15,18 +16,30 @@ from history.models import Mode
 from history.storage import utc
 
 DEFAULT_SPAN = timedelta(hours=1)
+# Times the API accepts (epoch seconds): 1970-01-01 up to 2200-01-01 UTC.
+TIME_MIN_S, TIME_MAX_S = 0.0, 7258118400.0
 
 
 def parse_time(value: str, *, name: str) -> datetime:
-    """ISO 8601 (naive = UTC) or epoch seconds."""
+    """ISO 8601 (naive = UTC) or epoch seconds, between 1970 and 2200."""
     try:
-        return utc(float(value))
+        seconds: float | None = float(value)
     except ValueError:
-        pass
-    parsed = parse_datetime(value.replace(" ", "+")) if value else None
-    if parsed is None:
-        raise serializers.ValidationError({name: f"{value!r} is not an ISO 8601 time or epoch seconds"})
-    return parsed if parsed.tzinfo else parsed.replace(tzinfo=utc(0).tzinfo)
+        seconds = None
+    if seconds is None:
+        try:
+            parsed = parse_datetime(value.replace(" ", "+")) if value else None
+        except ValueError as exc:  # well-formed but impossible, e.g. month 13
+            raise serializers.ValidationError({name: f"{value!r} is not a valid time: {exc}"}) from None
+        if parsed is None:
+            raise serializers.ValidationError({name: f"{value!r} is not an ISO 8601 time or epoch seconds"})
+        try:
+            seconds = (parsed if parsed.tzinfo else parsed.replace(tzinfo=utc(0).tzinfo)).timestamp()
+        except (OverflowError, ValueError):
+            seconds = math.inf
+    if not math.isfinite(seconds) or not TIME_MIN_S <= seconds <= TIME_MAX_S:
+        raise serializers.ValidationError({name: "must be a time between 1970-01-01 and 2200-01-01 UTC"})
+    return utc(seconds)
 
 
 class RangeIn(serializers.Serializer):
@@ -75,7 +88,7 @@ class SeriesOut(serializers.Serializer):
 class PolicyIn(serializers.Serializer):
     topic = serializers.CharField(max_length=255)
     msg_type = serializers.CharField(max_length=255, required=False, allow_blank=True)
-    mode = serializers.ChoiceField(choices=Mode.values, required=False)
+    mode = serializers.ChoiceField(choices=Mode.choices, required=False)
     interval_s = serializers.FloatField(required=False, allow_null=True, min_value=0.05)
     retention_s = serializers.FloatField(required=False, allow_null=True, min_value=1)
     max_message_bytes = serializers.IntegerField(required=False, allow_null=True, min_value=1)
@@ -102,4 +115,39 @@ class PoliciesOut(serializers.Serializer):
 
 
 class DiscoverIn(serializers.Serializer):
-    mode = serializers.ChoiceField(choices=Mode.values, default=Mode.OFF)
+    mode = serializers.ChoiceField(choices=Mode.choices, default=Mode.OFF)
+
+
+class DiscoverOut(serializers.Serializer):
+    discovered = serializers.IntegerField(help_text="Topics the robot reported")
+    added = serializers.IntegerField(help_text="Policies added for topics not known before")
+
+
+class RecordedTopicOut(serializers.Serializer):
+    topic = serializers.CharField()
+    msg_type = serializers.CharField()
+    mode = serializers.ChoiceField(choices=Mode.choices)
+    last = serializers.DateTimeField(allow_null=True, help_text="When the newest sample arrived")
+    fields = serializers.ListField(child=serializers.CharField(), help_text="Plottable numeric fields")
+
+
+class RecordedOut(serializers.Serializer):
+    topics = RecordedTopicOut(many=True)
+
+
+class TimelineSegmentOut(serializers.Serializer):
+    state = serializers.CharField()
+    start = serializers.FloatField(help_text="epoch seconds")
+    end = serializers.FloatField(help_text="epoch seconds")
+
+
+class TimelineOut(serializers.Serializer):
+    start = serializers.FloatField(help_text="epoch seconds")
+    end = serializers.FloatField(help_text="epoch seconds")
+    segments = TimelineSegmentOut(many=True)
+    totals = serializers.DictField(child=serializers.FloatField(), help_text="Seconds spent per state")
+
+
+class TimelineIn(serializers.Serializer):
+    start = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: an hour before end")
+    end = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: now")

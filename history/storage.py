@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 from django.db import close_old_connections, connection, transaction
 from django.db.models import BigIntegerField, ExpressionWrapper, F
 
+from cyborg_site.text import scrub
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
 from robot.wire import jsonable
@@ -81,7 +82,8 @@ def encode(pending: Sequence[Pending], limits: dict[str, int], *, default_max: i
     rows: list[Row] = []
     oversize = 0
     for topic, msg_type, msg, t in pending:
-        text = json.dumps(msg, separators=(",", ":"), ensure_ascii=False, default=jsonable)
+        # scrub: a lone surrogate from the robot would not encode for the database.
+        text = scrub(json.dumps(msg, separators=(",", ":"), ensure_ascii=False, default=jsonable))
         limit = limits.get(topic, default_max)
         size = len(text.encode()) if len(text) * 4 > limit else len(text)
         if size > limit:

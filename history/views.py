@@ -1,7 +1,7 @@
-from django.shortcuts import render
 from django.urls import reverse
 
 from cyborg_site.roles import is_admin
+from dashboard.rendering import render_safe
 from history.selectors import recorded_topics
 from robot import interface as ri
 
@@ -27,4 +27,4 @@ def index(request):
         },
     }
     context = {"history_config": config, "can_edit_policies": is_admin(request.user)}
-    return render(request, "history/index.html", context)
+    return render_safe(request, "history/index.html", context)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from cyborg_site.text import scrub, scrub_json
 from robot.models import AuditEntry
 
 
@@ -16,8 +17,9 @@ def audit_record(
         username=user.get_username() if authenticated else "",
         source=source,
         action=action,
-        params=params,
+        # Text as it came (the robot's, or refused input) is kept readable and storable.
+        params=scrub_json(params),
         ok=ok,
-        outcome=outcome[:2000],
+        outcome=scrub(outcome[:2000]),
         error_code=error_code,
     )

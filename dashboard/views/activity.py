@@ -5,8 +5,8 @@ from __future__ import annotations
 from urllib.parse import urlencode
 
 from django.core.paginator import Paginator
-from django.shortcuts import render
 
+from dashboard.rendering import render_safe
 from robot.commands.selectors import AUDIT_FILTERS, audit_entries
 from robot.models import AuditEntry
 
@@ -17,7 +17,7 @@ def activity(request):
     filters = {name: request.GET.get(name, "").strip() for name in AUDIT_FILTERS}
     page = Paginator(audit_entries(filters), PAGE_SIZE).get_page(request.GET.get("page"))
     query = urlencode({k: v for k, v in filters.items() if v})
-    return render(request, "dashboard/activity.html", {
+    return render_safe(request, "dashboard/activity.html", {
         "page_obj": page,
         "filters": filters,
         "query": query,

@@ -7,7 +7,7 @@ either way); the serializers here describe the input for the OpenAPI schema.
 from __future__ import annotations
 
 from collections.abc import Awaitable, Callable
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema, inline_serializer
@@ -16,6 +16,7 @@ from rest_framework.response import Response
 from rest_framework.views import APIView
 
 from robot.api.common import API_AUTHENTICATION, CommandThrottle, error_responses, source_of
+from robot.api.validation import body_object, reject_unknown
 from robot.commands import modes, motors, tool
 from robot.commands.validation import EVENT_MAX, MODE_NAMES, SPEECH_MAX
 
@@ -35,7 +36,8 @@ class _CommandView(APIView):
     command: ClassVar[Callable[..., Awaitable[str]]]
 
     def post(self, request) -> Response:
-        data: dict[str, Any] = request.data if isinstance(request.data, dict) else {}
+        data = body_object(request)
+        reject_unknown(data, [self.field])
         run = type(self).command
         outcome = async_to_sync(run)(user=request.user, source=source_of(request), **{self.field: data.get(self.field)})
         return Response({"ok": True, "action": self.action_name, "outcome": outcome})

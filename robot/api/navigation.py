@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema
 from rest_framework import permissions, status, viewsets
@@ -21,6 +19,7 @@ from robot.api.serializers_navigation import (
     NavigationStatus,
     PoseInput,
 )
+from robot.api.validation import body_object
 from robot.models import Location
 from robot.navigation.goals import agoal_cancel, agoal_send, ainitial_pose_set
 from robot.navigation.locations import alocation_go
@@ -30,10 +29,6 @@ from robot.navigation.selectors import map_meta, navigation_status
 def _source(request: Request) -> str:
     # The map page posts with its session; scripts use tokens.
     return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
-
-
-def _data(request: Request) -> dict[str, Any]:
-    return request.data if isinstance(request.data, dict) else request.data.dict()
 
 
 @extend_schema(responses={200: MapMeta}, summary="The latest map's metadata and versioned image URL")
@@ -49,7 +44,7 @@ def map_view(request: Request) -> Response:
 @extend_schema(request=PoseInput, responses={200: Goal}, summary="Send a navigation goal (move_base)")
 @api_view(["POST"])
 def goal_view(request: Request) -> Response:
-    return Response(async_to_sync(agoal_send)(user=request.user, source=_source(request), data=_data(request)))
+    return Response(async_to_sync(agoal_send)(user=request.user, source=_source(request), data=body_object(request)))
 
 
 @extend_schema(request=None, responses={200: NavigationStatus}, summary="Cancel the current goal")
@@ -67,7 +62,7 @@ def status_view(request: Request) -> Response:
 @extend_schema(request=PoseInput, responses={200: InitialPoseResult}, summary="Set the robot's initial pose")
 @api_view(["POST"])
 def initial_pose_view(request: Request) -> Response:
-    body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=_data(request))
+    body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=body_object(request))
     return Response(body)
 
 

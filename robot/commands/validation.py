@@ -11,40 +11,36 @@ from typing import Any
 
 from asgiref.sync import sync_to_async
 
+from cyborg_site.text import EMPTY, TextRejected, clean_text
 from robot import interface as ri
 from robot.commanding import InvalidCommand
 from robot.models import DomeMode, EmotionPreset, SoundClip
 
 EVENT_MAX = 64
 SPEECH_MAX = 500
+NAME_MAX = 64  # preset names (emotion, sound clip, dome mode), as in the models
 _EVENT_RE = re.compile(r"^[A-Za-z0-9_]+$")
 MODE_NAMES = tuple(m.short for m in ri.Mode)
 
 
-def _text(value: Any, field: str) -> str:
-    if not isinstance(value, str):
-        raise InvalidCommand(f"{field}: a text value is required.", field=field)
-    return value.strip()
-
-
-def _bounded(value: Any, field: str, limit: int, empty: str) -> str:
-    text = _text(value, field)
-    if not text:
-        raise InvalidCommand(f"{field}: {empty}", field=field)
-    if len(text) > limit:
-        raise InvalidCommand(f"{field}: at most {limit} characters (got {len(text)}).", field=field)
-    return text
+def _text(value: Any, field: str, *, limit: int, empty: str = "", multiline: bool = False) -> str:
+    """Text through the site's text policy; an empty value is refused with ``empty`` when given."""
+    try:
+        return clean_text(value, field=field, limit=limit, multiline=multiline, allow_empty=not empty)
+    except TextRejected as exc:
+        reason = empty if exc.reason == EMPTY else exc.reason
+        raise InvalidCommand(f"{field}: {reason}", field=field) from None
 
 
 def clean_event(value: Any) -> str:
-    event = _bounded(value, "event", EVENT_MAX, "name an event (e.g. aborted).")
+    event = _text(value, "event", limit=EVENT_MAX, empty="name an event (e.g. aborted).")
     if not _EVENT_RE.match(event):
         raise InvalidCommand("event: use letters, digits and '_' only.", field="event")
     return event
 
 
 def clean_speech(value: Any) -> str:
-    return _bounded(value, "text", SPEECH_MAX, "say something (the text is empty).")
+    return _text(value, "text", limit=SPEECH_MAX, empty="say something (the text is empty).", multiline=True)
 
 
 def clean_bool(value: Any, field: str) -> bool:
@@ -54,7 +50,7 @@ def clean_bool(value: Any, field: str) -> bool:
 
 
 def clean_mode(value: Any) -> ri.Mode:
-    name = _text(value, "mode")
+    name = _text(value, "mode", limit=NAME_MAX)
     try:
         return ri.Mode.from_short(name)
     except ValueError:
@@ -62,7 +58,7 @@ def clean_mode(value: Any) -> ri.Mode:
 
 
 async def _preset(model: type, value: Any, field: str, what: str) -> str:
-    name = _text(value, field)
+    name = _text(value, field, limit=NAME_MAX)
     # Thread-sensitive like the audit write: runs where the caller's request owns its connection.
     exists = await sync_to_async(model.objects.filter(name=name).exists, thread_sensitive=True)() if name else False
     if not exists:

@@ -19,7 +19,7 @@ from robot.navigation.selectors import anavigation_status
 from robot.navigation.shared import GOAL_KEY, aget_state, apublish_state
 from robot.navigation.status import TERMINAL_STATES, goal_view
 from robot.navigation.transforms import normalize_angle, yaw_to_quaternion
-from robot.navigation.validation import acheck_position, audit_params, number
+from robot.navigation.validation import POSE_FIELDS, acheck_position, audit_params, clean_yaw, number, only_fields
 from robot.teleop.latch import ensure_released
 
 # PoseWithCovarianceStamped for /initialpose: 0.5 m std-dev in x and y, 15 degrees in yaw.
@@ -87,8 +87,9 @@ async def agoal_send(*, user: Any, source: str, data: dict[str, Any]) -> dict[st
     sent: dict[str, Any] = {}
 
     async def run() -> str:
+        only_fields(data, POSE_FIELDS)
         x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
-        yaw = number(data.get("yaw"), "yaw", default=0.0)
+        yaw = clean_yaw(data.get("yaw"))
         await ensure_released()
         sent.update(await asend_pose_goal(user=user, x=x, y=y, yaw=yaw))
         return f"goal {sent['id']} sent to ({x:.2f}, {y:.2f}) facing {math.degrees(sent['yaw']):.0f}°"
@@ -122,13 +123,14 @@ async def ainitial_pose_set(*, user: Any, source: str, data: dict[str, Any]) -> 
     pose_sent: dict[str, float] = {}
 
     async def run() -> str:
+        only_fields(data, POSE_FIELDS)
         x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
-        yaw = normalize_angle(number(data.get("yaw"), "yaw", default=0.0))
+        heading = normalize_angle(clean_yaw(data.get("yaw")))
         await ensure_released()
         await acheck_position(x, y, allow_unknown=True)
-        await apublish("initialpose", initial_pose_message(x, y, yaw))
-        pose_sent.update(x=x, y=y, yaw=yaw)
-        return f"initial pose set to ({x:.2f}, {y:.2f}) facing {math.degrees(yaw):.0f}°"
+        await apublish("initialpose", initial_pose_message(x, y, heading))
+        pose_sent.update(x=x, y=y, yaw=heading)
+        return f"initial pose set to ({x:.2f}, {y:.2f}) facing {math.degrees(heading):.0f}°"
 
     params = audit_params(**{k: data.get(k) for k in ("x", "y", "yaw")})
     outcome = await arun_command(user=user, source=source, action="navigation.initial_pose", params=params, run=run)

@@ -34,6 +34,26 @@ def number(value: Any, field: str, *, default: float | None = None) -> float:
     return result
 
 
+YAW_LIMIT = 2 * math.pi
+POSE_FIELDS = frozenset({"x", "y", "yaw"})
+
+
+def clean_yaw(value: Any, *, default: float = 0.0) -> float:
+    """A heading in radians within (-2π, 2π] (0 = +x, counter-clockwise), or InvalidCommand."""
+    result = number(value, "yaw", default=default)
+    if not -YAW_LIMIT < result <= YAW_LIMIT:
+        raise InvalidCommand(f"yaw must be in radians within (-2π, 2π], got {result:g}", field="yaw")
+    return result
+
+
+def only_fields(data: dict[str, Any], allowed: frozenset[str]) -> None:
+    """Refuse input with fields this command does not take (a typo must not pass as a default)."""
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise InvalidCommand(f"{unknown[0]}: unknown field; this takes {', '.join(sorted(allowed))}",
+                             field=unknown[0])
+
+
 def audit_params(**values: Any) -> dict[str, Any]:
     """Input as the audit entry keeps it: NaN and infinities are not JSON, so keep their text."""
     return {k: v if not isinstance(v, float) or math.isfinite(v) else repr(v) for k, v in values.items()}

@@ -54,7 +54,7 @@ def test_it_refuses_a_bad_mode(admin_api):
     res = admin_api.patch("/api/history/topics/", {"topics": [{"topic": TOPIC, "mode": "often"}]}, format="json")
 
     assert res.status_code == 400
-    assert res.json()["field"] == "topics"
+    assert res.json()["field"] == "topics.0.mode"
 
 
 def test_it_serves_a_downsampled_series(viewer_api):
