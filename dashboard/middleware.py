@@ -7,6 +7,7 @@ _EXEMPT_PREFIXES = ("/api/", "/static/", "/admin/")
 
 class LoginRequiredMiddleware(_DjangoLoginRequired):
     def process_view(self, request, view_func, view_args, view_kwargs):
-        if request.path.startswith(_EXEMPT_PREFIXES):
+        # Open views first: /healthz must not load the session (the database may be down).
+        if request.path.startswith(_EXEMPT_PREFIXES) or not getattr(view_func, "login_required", True):
             return None
         return super().process_view(request, view_func, view_args, view_kwargs)

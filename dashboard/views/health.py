@@ -1,13 +1,14 @@
 from django.contrib.auth.decorators import login_not_required
 from django.http import JsonResponse
 
-from robot.state import link_status
+from dashboard.health import health_report
 
 
 @login_not_required
 def healthz(request):
-    """For load balancers and scripts: is the server up, is the robot link connected, and to which robot."""
-    status = link_status()
-    running = status.get("link_running", False)
-    return JsonResponse({"ok": True, "connected": status["connected"], "link_running": running,
-                         "robot_url": status.get("url") or ""})
+    """For load balancers and scripts: 503 naming what is down, else 200; and the robot link's state."""
+    report = health_report()
+    if not report["ok"]:
+        report["detail"] = "service unavailable: " + ", ".join(report["down"])
+        report["code"] = "unavailable"
+    return JsonResponse(report, status=200 if report["ok"] else 503)

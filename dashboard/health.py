@@ -1,0 +1,71 @@
+"""What /healthz reports: one small check per backing service, and the robot link.
+
+A check returns a ``Check`` (or None when it does not apply to this wiring); add one by
+appending a function to ``CHECKS``. Any failing check makes /healthz answer 503.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from django.conf import settings
+from django.db import connection
+
+from robot.api.errors import UNAVAILABLE_TEXT, unavailable
+from robot.state import link_status
+
+PING_TIMEOUT_S = 1.0
+
+
+@dataclass(frozen=True)
+class Check:
+    name: str
+    ok: bool
+    detail: str = ""
+
+
+def check_database() -> Check:
+    try:
+        with connection.cursor() as cursor:
+            cursor.execute("SELECT 1")
+    except Exception as exc:
+        if not unavailable(exc):
+            raise
+        return Check("database", False, f"{UNAVAILABLE_TEXT['database']}: {exc}")
+    return Check("database", True)
+
+
+def check_redis() -> Check | None:
+    if not settings.REDIS_URL:
+        return None  # embedded: no Redis in this wiring
+    import redis
+
+    client = redis.Redis.from_url(settings.REDIS_URL, socket_connect_timeout=PING_TIMEOUT_S,
+                                  socket_timeout=PING_TIMEOUT_S)
+    try:
+        client.ping()
+    except (redis.ConnectionError, redis.TimeoutError) as exc:
+        return Check("redis", False, f"{UNAVAILABLE_TEXT['redis']}: {exc}")
+    finally:
+        client.close()
+    return Check("redis", True)
+
+
+CHECKS: list[Callable[[], Check | None]] = [check_database, check_redis]
+
+
+def health_report() -> dict[str, Any]:
+    checks = [check for run in CHECKS if (check := run()) is not None]
+    down = [c.name for c in checks if not c.ok]
+    report: dict[str, Any] = {
+        "ok": not down,
+        "down": down,
+        "checks": {c.name: {"ok": c.ok, **({"detail": c.detail} if c.detail else {})} for c in checks},
+    }
+    # The robot being offline is reported, not a failure of this server.
+    status = link_status() if "redis" not in down else {"connected": False, "url": settings.ROSBRIDGE_URL}
+    report.update(connected=bool(status["connected"]), link_running=bool(status.get("link_running", False)),
+                  robot_url=status.get("url") or "")
+    return report
