@@ -249,6 +249,19 @@ COMMANDER_SEQUENCES: dict[Mode, tuple[Step, ...]] = {
         ("pause", COMMANDER_PAUSE_S), ("event", Event.SUSPEND),
     ),
 }
+# What a mode request does once the state machine is in suspension: the emotion system switch
+# and the event that enters the mode (none for stop: suspension is the target).
+MODE_ENTRY: dict[Mode, tuple[bool, Event | None]] = {
+    Mode.BEHAVIOUR: (True, Event.BEHAVIOUR_START),
+    Mode.DEMO: (False, Event.DEMO_START),
+    Mode.MANUAL: (False, Event.MANUAL_START),
+    Mode.STOP: (False, None),
+}
+# Top-level states outside the behaviour container; every other state is one of its leaves.
+TOP_LEVEL_STATES: frozenset[str] = frozenset({State.STARTUP, State.SUSPENSION, State.DEMO, State.MANUAL})
+# Inside the container every state returns to idle on `aborted`, except sleeping (`preempted`);
+# idle leaves the container with `suspend` (ROBOT_INTERFACE.md, "The state machine").
+SLEEPING_STATE = "sleeping"
 # Leaf states inside the behaviour container (incl. the navigation container's leaves).
 # state_change names the leaf entered, so "behaviour_start" reports to_system_state "idle":
 # any of these means the robot is in behaviour mode.

@@ -7,6 +7,9 @@ Two strategies (``settings.MODE_COMMANDER``):
   not also publish ``robot_mode``, or a robot that has the node would run it twice.
 - ``robot``: publish the mode string on ``robot_mode`` and let the robot's commander run it.
 
+Either way the server first walks the state machine to suspension (moderoute), because the
+commander's sequences fail from inside the behaviour container, and checks the result.
+
 Mode changes are serialised: a second request while one runs is refused with 409 ``Busy``
 rather than queued (an operator who clicked Demo then Manual should see that Demo is still
 being applied, not have Manual fire half a second later). The lock is in-process in the
@@ -32,6 +35,8 @@ from django.conf import settings
 from robot import bus
 from robot import interface as ri
 from robot.commanding import Busy, arun_command
+from robot.commands import moderoute
+from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
 from robot.groups import topic_group
 from robot.state import get_store
@@ -39,60 +44,129 @@ from robot.teleop.latch import ensure_released
 
 # Latest-state key (server-side, not a ROS topic) holding the last requested mode.
 MODE_REQUEST_KEY = "mode_request"
-# Top-level states other than behaviour; any other state is in (a leaf of) the behaviour container.
-_OUTSIDE_BEHAVIOUR = frozenset(s.value for s in ri.State) - {ri.State.BEHAVIOUR.value, ri.State.IDLE.value}
+# How long one step may take to show up on state_change, and how many steps a change may take
+# (the longest way out is sleeping → idle → suspension; the rest is room for states that move
+# on by themselves while we walk).
+STEP_TIMEOUT_S = 2.0
+MAX_STEPS = 8
 
 
 def sequence_pause_s(mode: ri.Mode) -> float:
     return sum(float(value) for kind, value in ri.COMMANDER_SEQUENCES[mode] if kind == "pause")
 
 
+def longest_change_s(mode: ri.Mode) -> float:
+    return sequence_pause_s(mode) + (MAX_STEPS + 1) * STEP_TIMEOUT_S
+
+
 def state_reached(mode: ri.Mode, state: str) -> bool:
     """Is the state machine in ``state`` where ``mode`` should have taken it?"""
     target = ri.MODE_TARGET_STATE[mode].value
     if target == ri.State.BEHAVIOUR.value:
-        return bool(state) and state not in _OUTSIDE_BEHAVIOUR
+        return moderoute.in_behaviour(state)
     return state == target
 
 
 # --- the work --------------------------------------------------------------------------
 
 
-async def _run_sequence(mode: ri.Mode) -> None:
-    for kind, value in ri.COMMANDER_SEQUENCES[mode]:
-        if kind == "pause":
-            await asyncio.sleep(float(value))
-        elif kind == "event":
-            await bus.apublish("register_event", {"data": str(value)})
-        elif kind == "emotion_system":
-            switch = ri.EMOTION_SYSTEM_ON if value else ri.EMOTION_SYSTEM_OFF
-            await bus.apublish("emotional_controller", {"data": switch})
+class ModeStepFailed(bus.RobotError):
+    pass
 
 
-def _describe(mode: ri.Mode) -> str:
-    steps = []
-    for kind, value in ri.COMMANDER_SEQUENCES[mode]:
-        if kind == "event":
-            steps.append(str(value))
-        elif kind == "emotion_system":
-            steps.append(f"emotion system {ri.EMOTION_SYSTEM_ON if value else ri.EMOTION_SYSTEM_OFF}")
-    return ", ".join(steps)
+class _Walk:
+    """One mode change: the steps taken so far, each checked against state_change."""
+
+    def __init__(self, mode: ri.Mode, watch: StateWatch) -> None:
+        self.mode = mode
+        self.watch = watch
+        self.done: list[str] = []
+
+    def fail(self, what: str, why: str) -> ModeStepFailed:
+        return ModeStepFailed(
+            f"{self.mode.short.capitalize()} mode not reached: step {len(self.done) + 1} ({what}) failed: {why}; "
+            f"the state machine is in {self.watch.state or 'an unknown state'}."
+            + (f" Done before it: {', '.join(self.done)}." if self.done else ""))
+
+    async def emotion_system(self, on: bool) -> None:
+        await bus.apublish("emotional_controller", {"data": ri.EMOTION_SYSTEM_ON if on else ri.EMOTION_SYSTEM_OFF})
+        self.done.append(f"emotion system {ri.EMOTION_SYSTEM_ON if on else ri.EMOTION_SYSTEM_OFF}")
+
+    async def event(self, step: moderoute.Step) -> Change | None:
+        """Send the step's event; its state_change, or None if the state moved on by itself meanwhile."""
+        await bus.apublish("register_event", {"data": step.event})
+        change = await self.watch.wait_for(lambda c: c.get("event") == step.event, STEP_TIMEOUT_S)
+        if change is None:
+            if step.from_state and self.watch.state != step.from_state:
+                return None  # something else moved it (a behaviour finishing): plan again from there
+            raise self.fail(step.describe(), f"no state_change for it within {STEP_TIMEOUT_S:g} s (ignored?)")
+        self.done.append(f"{step.event} ({change.get('from_system_state')} → {change.get('to_system_state')})")
+        return change
+
+    async def to_suspension(self) -> None:
+        for _ in range(MAX_STEPS):
+            step = moderoute.way_out(self.watch.state)
+            if step is None:
+                return
+            await self.event(step)
+        raise self.fail("reach suspension", f"still not there after {MAX_STEPS} steps")
+
+    async def enter(self) -> None:
+        step = moderoute.way_in(self.mode)
+        if step is None:
+            return
+        change = await self.event(step)
+        if change is None or not state_reached(self.mode, change.get("to_system_state", "")):
+            raise self.fail(step.describe(), f"it led to {self.watch.state or 'no state'}")
+
+    async def by_robot_commander(self) -> None:
+        await bus.apublish("robot_mode", {"data": self.mode.value})
+        what = f"robot_mode '{self.mode.value}' to the robot's commander"
+        # The commander's sequence starts with `aborted` (suspension → suspension) and, but for
+        # stop, ends with the mode's start event.
+        last = ri.MODE_ENTRY[self.mode][1] or ri.Event.ABORTED
+        change = await self.watch.wait_for(
+            lambda c: c.get("event") == last and state_reached(self.mode, c.get("to_system_state", "")),
+            sequence_pause_s(self.mode) + STEP_TIMEOUT_S)
+        if change is None:
+            raise self.fail(what, f"the state machine did not reach {ri.MODE_TARGET_STATE[self.mode].value} "
+                                  f"within {sequence_pause_s(self.mode) + STEP_TIMEOUT_S:g} s")
+        self.done.append(what)
+
+
+async def _change(mode: ri.Mode) -> str:
+    watch = StateWatch()
+    await watch.start()
+    walk = _Walk(mode, watch)
+    by_server = settings.MODE_COMMANDER != "robot"
+    emotion_on = ri.MODE_ENTRY[mode][0]
+    if by_server and not emotion_on:
+        await walk.emotion_system(False)  # first, so the behaviour system starts nothing new on the way out
+    await walk.to_suspension()
+    if by_server:
+        if mode is not ri.Mode.STOP:
+            await asyncio.sleep(ri.COMMANDER_PAUSE_S)  # the commander's pause before entering a mode
+            if emotion_on:
+                await walk.emotion_system(True)
+            await walk.enter()
+    else:
+        await walk.by_robot_commander()
+    return f"{mode.short.capitalize()} mode reached ({watch.state}): {', '.join(walk.done) or 'already there'}"
 
 
 async def perform_mode(mode: ri.Mode, *, requested_by: str = "") -> str:
-    """Change to ``mode`` with the configured strategy; raises ``RobotError`` on failure."""
+    """Change to ``mode`` from whatever state the robot is in, with the configured strategy.
+
+    Walks the state machine out of the behaviour container (and any state nested in it) to
+    suspension, then into the mode, checking every step on ``state_change``; raises
+    ``RobotError`` naming the step that failed."""
     await announce_request(mode, by=requested_by, status="running")
     try:
-        if settings.MODE_COMMANDER == "robot":
-            await bus.apublish("robot_mode", {"data": mode.value})
-            outcome = f"Asked the robot's commander for {mode.short} mode"
-        else:
-            await _run_sequence(mode)
-            outcome = f"{mode.short.capitalize()} mode: sent {_describe(mode)}"
+        outcome = await _change(mode)
     except bus.RobotError as exc:
         await announce_request(mode, by=requested_by, status="failed", error=exc.message)
         raise
-    await announce_request(mode, by=requested_by, status="sent")
+    await announce_request(mode, by=requested_by, status="reached")
     return outcome
 
 
@@ -105,11 +179,7 @@ async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
             await ensure_released()
         async with serialised(chosen):
             by = user.get_username() if getattr(user, "is_authenticated", False) else ""
-            outcome = await perform_mode(chosen, requested_by=by)
-            if settings.MODE_COMMANDER == "robot":
-                # Hold the lock while the robot's commander runs its sequence.
-                await asyncio.sleep(sequence_pause_s(chosen))
-            return outcome
+            return await perform_mode(chosen, requested_by=by)
 
     params = {"mode": mode.short if isinstance(mode, ri.Mode) else mode}
     return await arun_command(user=user, source=source, action="mode", params=params, run=run)
@@ -167,7 +237,7 @@ async def _redis_lock(mode: ri.Mode) -> AsyncIterator[None]:
     import redis.asyncio
 
     # Expires just after the longest a sequence can take, should this process die holding it.
-    ttl_s = sequence_pause_s(mode) + settings.ROBOT_REQUEST_TIMEOUT_S + 1.0
+    ttl_s = longest_change_s(mode) + 1.0
     token = f"{uuid.uuid4().hex}:{mode.short}"
     client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
     try:

@@ -450,7 +450,7 @@ class SimRobot:
             self.rosout(2, "/cyborg_commander", f"Robot mode: {mode.value}")
             for kind, value in ri.COMMANDER_SEQUENCES[mode]:
                 if kind == "pause":
-                    await asyncio.sleep(self.commander_pause_s if value == ri.COMMANDER_PAUSE_S else float(value))
+                    await asyncio.sleep(self.commander_pause_s)  # every pause in the sequences is this one
                 elif kind == "event":
                     self._internal("register_event", {"data": str(value)})
                 elif kind == "emotion_system":

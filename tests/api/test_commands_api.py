@@ -18,8 +18,9 @@ def test_it_switches_to_manual_with_the_server_strategy(operator_api, robot, set
     assert res.json()["ok"] is True
     state = wait_state(robot, lambda s: s["smach_state"] == "manual", "state manual")
     assert state["emotion_system"] is False
-    # The server ran the commander's sequence itself and did not ask the robot's commander.
-    assert received(robot, "register_event") == [{"data": "aborted"}, {"data": "manual_start"}]
+    # The server ran the commander's sequence itself and did not ask the robot's commander; already
+    # in suspension, it needed no `aborted` to get there.
+    assert received(robot, "register_event") == [{"data": "manual_start"}]
     assert received(robot, "emotional_controller") == [{"data": "OFF"}]
     assert received(robot, "robot_mode") == []
     entry = last_audit()

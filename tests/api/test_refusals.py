@@ -97,16 +97,16 @@ def test_it_refuses_a_second_mode_change_while_one_runs(operator, robot):
     runner = threading.Thread(target=lambda: answers.update(first=first.post("/api/robot/mode/", {"mode": "demo"},
                                                                              format="json")))
     runner.start()
-    # The server strategy is inside its 0.5 s pause once the first event has reached the robot.
-    wait_until(lambda: robot.received_count("/cyborg_controller/register_event") == 1, what="first event")
+    # The server strategy is inside its 0.5 s pause once the emotion system switch has reached the robot.
+    wait_until(lambda: robot.received_count("/cyborg_controller/emotional_controller") == 1, what="first step")
     res = second.post("/api/robot/mode/", {"mode": "manual"}, format="json")
     runner.join(10)
     assert res.status_code == 409
     assert res.json() == {"detail": "A mode change to demo is already in progress; try again in a moment.",
                           "code": "busy"}
     assert answers["first"].status_code == 200
-    wait_until(lambda: robot.received_count("/cyborg_controller/register_event") == 2, what="demo_start")
-    assert [m["data"] for m in robot.received("/cyborg_controller/register_event")] == ["aborted", "demo_start"]
+    wait_until(lambda: robot.received_count("/cyborg_controller/register_event") == 1, what="demo_start")
+    assert [m["data"] for m in robot.received("/cyborg_controller/register_event")] == ["demo_start"]
     assert last_audit().error_code in ("busy", "")  # both entries are written; order depends on timing
     assert AuditEntry.objects.filter(action="mode", error_code="busy").count() == 1
 

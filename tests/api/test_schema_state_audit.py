@@ -76,7 +76,7 @@ def test_it_reports_latest_values_ages_events_and_the_mode(viewer_api, operator_
     wait_state(robot, lambda s: s["smach_state"] == "manual", "state manual")
     mode = wait_until(lambda: (m := viewer_api.get("/api/robot/state/").json()["mode"]) and m["reached"] and m,
                       what="mode reached")
-    assert (mode["mode"], mode["by"], mode["status"], mode["state"]) == ("manual", "otto", "sent", "manual")
+    assert (mode["mode"], mode["by"], mode["status"], mode["state"]) == ("manual", "otto", "reached", "manual")
     assert viewer_api.get("/api/robot/state/").json()["available_events"] == {"succeeded": "suspension",
                                                                                "aborted": "suspension"}
 

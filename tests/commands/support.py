@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import asyncio
+import time
+from collections.abc import Callable
 from typing import Any
 
 from robot import interface as ri
+from robot.commands.statewatch import StateWatch
 from robot.models import AuditEntry
 from tests.helpers import wait_until
 
@@ -64,3 +68,12 @@ def last_audit() -> AuditEntry:
     entry = AuditEntry.objects.first()
     assert entry is not None, "no audit entry was written"
     return entry
+
+
+async def until_the_server_hears(accept: Callable[[str], bool], what: str, timeout: float = 5.0) -> str:
+    """Wait for the link to report a state ``accept`` takes (the state the server plans from)."""
+    deadline = time.monotonic() + timeout
+    while not accept(state := await StateWatch().start()):
+        assert time.monotonic() < deadline, f"the server never heard of {what} (it knows {state!r})"
+        await asyncio.sleep(0.02)
+    return state

@@ -19,11 +19,11 @@ def test_it_switches_to_manual_when_an_operator_clicks_manual(page, stack):
     state = page.locator('[data-field="smach.current"]')
     # Start from a known state whatever earlier tests did to the shared robot.
     page.click('[data-mode="stop"]')
-    expect(page.locator('#card-mode [data-field="mode.request"]')).to_have_text("stop by otto · sent")
+    expect(page.locator('#card-mode [data-field="mode.request"]')).to_have_text("stop by otto · reached")
     expect(state).to_have_text("suspension")
     page.click('[data-mode="manual"]')
     expect(state).to_have_text("manual", timeout=10_000)
-    expect(page.locator('#card-mode [data-field="mode.request"]')).to_have_text("manual by otto · sent")
+    expect(page.locator('#card-mode [data-field="mode.request"]')).to_have_text("manual by otto · reached")
     expect(page.locator('#card-mode [data-field="mode.reached"]')).to_have_text("manual ✓")
     expect(page.locator('[data-mode="manual"]')).to_have_attribute("aria-pressed", "true")
     expect(page.locator('[data-field="mode.mismatch"]')).to_be_hidden()

@@ -7,7 +7,7 @@ import pytest
 from robot import interface as ri
 from robot.commanding import Busy
 from robot.commands import modes
-from tests.commands.support import received, wait_ready
+from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 
@@ -56,17 +56,18 @@ async def test_it_lets_the_redis_lock_expire_if_its_holder_dies(settings):
 @pytest.mark.django_db(transaction=True, serialized_rollback=True)
 async def test_it_shows_every_watcher_the_requested_mode(link, sim, operator, viewer):
     wait_ready(sim)
+    await until_the_server_hears(lambda s: s == "suspension", "suspension")
     communicator = ws_communicator(viewer)
     await communicator.connect()
     await communicator.send_json_to({"action": "watch", "keys": [modes.MODE_REQUEST_KEY]})
     outcome = await modes.achange_mode(user=operator, source="websocket", mode=ri.Mode.MANUAL)
-    assert outcome.startswith("Manual mode: sent aborted")
+    assert outcome == "Manual mode reached (manual): emotion system OFF, manual_start (suspension → manual)"
     frames = []
     await receive_until(communicator, lambda f: f.get("key") == "mode_request" and frames.append(f["msg"]) is None
-                        and f["msg"]["status"] == "sent")
-    assert [f["status"] for f in frames] == ["running", "sent"]
+                        and f["msg"]["status"] == "reached")
+    assert [f["status"] for f in frames] == ["running", "reached"]
     assert frames[-1] | {"strategy": None} == {"mode": "manual", "value": "manual control", "target_state": "manual",
-                                               "by": "otto", "status": "sent", "error": "", "strategy": None}
+                                               "by": "otto", "status": "reached", "error": "", "strategy": None}
     await async_wait_until(lambda: sim.snapshot()["state"]["smach_state"] == "manual", timeout=5)
     await communicator.disconnect()
 
@@ -74,8 +75,10 @@ async def test_it_shows_every_watcher_the_requested_mode(link, sim, operator, vi
 async def test_it_performs_a_mode_without_role_or_lock_for_the_emergency_stop(link, sim, settings):
     settings.MODE_COMMANDER = "server"
     wait_ready(sim)
+    await until_the_server_hears(lambda s: s == "suspension", "suspension")
+    await modes.perform_mode(ri.Mode.DEMO)
     async with modes.serialised(ri.Mode.DEMO):  # a mode change in progress does not block it
         await modes.perform_mode(ri.Mode.STOP)
     await async_wait_until(lambda: len(received(sim, "register_event")) == 2, what="both events")
-    assert [m["data"] for m in received(sim, "register_event")] == ["aborted", "suspend"]
-    assert received(sim, "emotional_controller") == [{"data": "OFF"}]
+    assert [m["data"] for m in received(sim, "register_event")] == ["demo_start", "aborted"]
+    assert received(sim, "emotional_controller") == [{"data": "OFF"}, {"data": "OFF"}]
