@@ -138,4 +138,5 @@ def timeline_view(request: Request) -> Response:
     q = s.RangeIn(data={**request.query_params.dict(), "topic": ri.topic("state_change").name})
     q.is_valid(raise_exception=True)
     t = state_timeline(start=q.validated_data["start"], end=q.validated_data["end"])
-    return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals})
+    return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals,
+                     "spans": [{"start": lo, "end": hi} for lo, hi in t.spans]})

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
 
+from django.db import connection
+
 from history.models import Mode, Sample, TopicPolicy
 from history.rollup import numeric_leaves
 from history.storage import utc
@@ -37,16 +39,52 @@ def recorded_topics() -> list[dict[str, Any]]:
     return out
 
 
+# No sample of any topic for this long: the robot (or the recorder) was away, and the time
+# is nobody's state. Wider than the slowest default periodic interval.
+GAP_S = 120.0
+_PRECISION_S = 0.001  # SQLite's julianday() times are only this exact
+_EPOCH = {
+    "postgresql": "extract(epoch FROM received_at)::float8",
+    "sqlite": "(julianday(received_at) - 2440587.5) * 86400.0",
+}
+
+
 @dataclass
 class Timeline:
     start: float
     end: float
     segments: list[dict[str, Any]] = field(default_factory=list)  # {"state", "start", "end"}
     totals: dict[str, float] = field(default_factory=dict)  # seconds per state
+    spans: list[tuple[float, float]] = field(default_factory=list)  # when data was recorded at all
+
+
+def recorded_spans(t0: float, t1: float, gap_s: float = GAP_S) -> list[tuple[float, float]]:
+    """The stretches of [t0, t1] covered by samples of any topic, no two samples further than
+    ``gap_s`` apart; a stretch reaching to within ``gap_s`` of an edge runs on to it."""
+    width = gap_s / 2
+    sql = (f"SELECT floor(e / %s), min(e), max(e) FROM (SELECT {_EPOCH[connection.vendor]} AS e"
+           f" FROM {Sample._meta.db_table} WHERE received_at >= %s AND received_at < %s) z GROUP BY 1 ORDER BY 1")
+    adapt = connection.ops.adapt_datetimefield_value
+    with connection.cursor() as cursor:
+        cursor.execute(sql, [width, adapt(utc(t0 - gap_s)), adapt(utc(t1))])
+        buckets = [(float(lo), float(hi)) for _, lo, hi in cursor.fetchall()]
+    spans: list[list[float]] = []
+    for lo, hi in buckets:
+        if spans and lo - spans[-1][1] <= gap_s:
+            spans[-1][1] = hi
+        else:
+            spans.append([lo, hi])
+    out = []
+    for lo, hi in spans:
+        lo, hi = max(lo, t0), min(t1, t1 if t1 - hi <= gap_s else hi)
+        if hi > lo:
+            out.append((lo, hi))
+    return out
 
 
 def state_timeline(*, start: datetime, end: datetime, now: float | None = None) -> Timeline:
-    """Time spent per state-machine state between start and end, from recorded state changes."""
+    """Time spent per state-machine state between start and end, from recorded state changes,
+    counting only the time the recording covers (a robot that ran ten minutes shows ten minutes)."""
     topic = ri.topic("state_change").name
     t0, t1 = start.timestamp(), min(end.timestamp(), now or time.time())
     before = (
@@ -57,7 +95,7 @@ def state_timeline(*, start: datetime, end: datetime, now: float | None = None) 
         Sample.objects.filter(topic=topic, received_at__gte=start, received_at__lt=utc(t1))
         .order_by("received_at", "id").values_list("received_at", "data")
     )
-    timeline = Timeline(start=t0, end=t1)
+    timeline = Timeline(start=t0, end=t1, spans=recorded_spans(t0, t1))
     state = before[1].get("to_system_state") if before else None
     since = t0
     for received_at, data in changes:
@@ -71,7 +109,16 @@ def state_timeline(*, start: datetime, end: datetime, now: float | None = None) 
 
 
 def _close(timeline: Timeline, state: str | None, start: float, end: float) -> None:
-    if state is None or end <= start:
+    """Count [start, end] in ``state``, where the recording covers it."""
+    if state is None:
         return
-    timeline.segments.append({"state": state, "start": start, "end": end})
-    timeline.totals[state] = timeline.totals.get(state, 0.0) + (end - start)
+    for lo, hi in timeline.spans:
+        lo, hi = max(lo, start), min(hi, end)
+        if hi - lo < _PRECISION_S:
+            continue
+        last = timeline.segments[-1] if timeline.segments else None
+        if last is not None and last["state"] == state and last["end"] == lo:
+            last["end"] = hi
+        else:
+            timeline.segments.append({"state": state, "start": lo, "end": hi})
+        timeline.totals[state] = timeline.totals.get(state, 0.0) + (hi - lo)

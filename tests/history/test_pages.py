@@ -73,13 +73,14 @@ def test_it_computes_time_spent_per_state(db):
     assert timeline.segments[0]["start"] == pytest.approx(t0)
 
 
-def test_it_starts_the_timeline_from_the_first_change_when_nothing_came_before(db):
+def test_it_counts_only_the_span_the_data_covers(db):
     t0 = time.time() - 3600
     _state_changes(t0, [(20, "startup", "suspension")])
 
     timeline = state_timeline(start=utc(t0), end=utc(t0 + 60))
 
-    assert timeline.totals == pytest.approx({"startup": 20, "suspension": 40})
+    # How long startup ran before t0 + 20 is unknown: nothing was recorded before it.
+    assert timeline.totals == pytest.approx({"suspension": 40}, abs=0.01)
 
 
 def test_it_stops_the_timeline_at_now(db):
@@ -88,7 +89,37 @@ def test_it_stops_the_timeline_at_now(db):
 
     timeline = state_timeline(start=utc(now - 60), end=utc(now + 3600), now=now)
 
-    assert timeline.totals == pytest.approx({"idle": 30, "demo": 30}, abs=0.01)
+    assert timeline.totals == pytest.approx({"demo": 30}, abs=0.01)
+
+
+def _battery_every_10_s(t0: float, duration_s: float) -> None:
+    topic = ri.topic("battery_soc")
+    write_rows([(topic.name, topic.type, t0 + i * 10, '{"data": 0.8}') for i in range(int(duration_s // 10) + 1)])
+
+
+def test_it_shows_ten_minutes_for_a_robot_that_ran_ten_minutes_in_the_last_day(db):
+    now = time.time()
+    began = now - 23 * 3600
+    _battery_every_10_s(began, 600)
+    _state_changes(began, [(15, "startup", "suspension"), (300, "suspension", "idle")])
+
+    timeline = state_timeline(start=utc(now - 86400), end=utc(now), now=now)
+
+    assert timeline.totals == pytest.approx({"startup": 15, "suspension": 285, "idle": 300}, abs=0.01)
+    assert timeline.spans == [pytest.approx((began, began + 600), abs=0.01)]
+
+
+def test_it_leaves_out_the_time_the_robot_was_away(db):
+    t0 = time.time() - 7200
+    _battery_every_10_s(t0, 300)
+    _battery_every_10_s(t0 + 3600, 300)
+    _state_changes(t0, [(0, "startup", "suspension"), (3600, "suspension", "startup"),
+                        (3615, "startup", "suspension")])
+
+    timeline = state_timeline(start=utc(t0 - 60), end=utc(t0 + 3900))
+
+    assert timeline.totals == pytest.approx({"suspension": 300 + 285, "startup": 15}, abs=0.01)
+    assert [s["state"] for s in timeline.segments] == ["suspension", "startup", "suspension"]
 
 
 def test_it_serves_the_timeline(viewer_api):
@@ -98,7 +129,8 @@ def test_it_serves_the_timeline(viewer_api):
     res = viewer_api.get("/api/history/timeline/", {"start": t0, "end": t0 + 20})
 
     assert res.status_code == 200
-    assert res.json()["totals"] == pytest.approx({"suspension": 10, "idle": 10})
+    assert res.json()["totals"] == pytest.approx({"idle": 10}, abs=0.01)
+    assert res.json()["spans"] == [{"start": pytest.approx(t0 + 10, abs=0.01), "end": pytest.approx(t0 + 20)}]
 
 
 def test_it_explains_an_empty_history(client, viewer):
