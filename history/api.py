@@ -22,7 +22,7 @@ from history.downsample import series
 from history.export import EXPORTERS, FORMATS
 from history.models import RecordingSettings, TopicPolicy
 from history.policies import default_interval_set, effective_interval, policies_add_discovered, policy_upsert
-from history.selectors import recorded_topics, state_timeline
+from history.selectors import recorded_messages, recorded_topics, state_timeline
 from robot import interface as ri
 from robot.bus import acall_service
 
@@ -129,6 +129,17 @@ async def _async_chunks(chunks):
 @api_view(["GET"])
 def recorded_view(request: Request) -> Response:
     return Response({"topics": recorded_topics()})
+
+
+@extend_schema(parameters=[s.MessagesIn], responses={200: s.MessagesOut},
+               summary="A topic's recorded messages in a range, newest first (text topics: speech, log, state changes)")
+@api_view(["GET"])
+def messages_view(request: Request) -> Response:
+    q = s.MessagesIn(data=request.query_params)
+    q.is_valid(raise_exception=True)
+    v = q.validated_data
+    rows, truncated = recorded_messages(topic=v["topic"], start=v["start"], end=v["end"], limit=v["limit"])
+    return Response({"topic": v["topic"], "messages": rows, "truncated": truncated})
 
 
 @extend_schema(parameters=[s.TimelineIn], responses={200: s.TimelineOut},

@@ -9,4 +9,5 @@ urlpatterns = [
     path("samples/", api.samples_view, name="history-samples"),
     path("export/", api.ExportView.as_view(), name="history-export"),
     path("timeline/", api.timeline_view, name="history-timeline"),
+    path("messages/", api.messages_view, name="history-messages"),
 ]

@@ -35,8 +35,27 @@ def recorded_topics() -> list[dict[str, Any]]:
             "topic": policy.topic, "msg_type": policy.msg_type, "mode": policy.mode,
             "last": last.received_at if last else None,
             "fields": numeric_fields(last.data) if last else [],
+            "text": has_text(last.data) if last else False,
         })
     return out
+
+
+def has_text(msg: Any) -> bool:
+    """Does the message carry text worth reading (a String, a log line, a state change)? Headers don't count."""
+    if isinstance(msg, str):
+        return True
+    if isinstance(msg, dict):
+        return any(has_text(v) for k, v in msg.items() if k != "header")
+    return False
+
+
+def recorded_messages(*, topic: str, start: datetime, end: datetime, limit: int) -> tuple[list[dict[str, Any]], bool]:
+    """Up to ``limit`` messages of ``topic`` in [start, end), newest first, and whether there were more."""
+    rows = list(
+        Sample.objects.filter(topic=topic, received_at__gte=start, received_at__lt=end)
+        .order_by("-received_at", "-id").values_list("received_at", "data")[: limit + 1]
+    )
+    return [{"t": at.timestamp(), "data": data} for at, data in rows[:limit]], len(rows) > limit
 
 
 # No sample of any topic for this long: the robot (or the recorder) was away, and the time

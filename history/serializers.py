@@ -16,6 +16,7 @@ from history.models import Mode
 from history.storage import utc
 
 DEFAULT_SPAN = timedelta(hours=1)
+MESSAGES_MAX = 1000
 # Times the API accepts (epoch seconds): 1970-01-01 up to 2200-01-01 UTC.
 TIME_MIN_S, TIME_MAX_S = 0.0, 7258118400.0
 
@@ -129,6 +130,7 @@ class RecordedTopicOut(serializers.Serializer):
     mode = serializers.ChoiceField(choices=Mode.choices)
     last = serializers.DateTimeField(allow_null=True, help_text="When the newest sample arrived")
     fields = serializers.ListField(child=serializers.CharField(), help_text="Plottable numeric fields")
+    text = serializers.BooleanField(help_text="Has text fields: read as a table of messages")
 
 
 class RecordedOut(serializers.Serializer):
@@ -141,11 +143,32 @@ class TimelineSegmentOut(serializers.Serializer):
     end = serializers.FloatField(help_text="epoch seconds")
 
 
+class SpanOut(serializers.Serializer):
+    start = serializers.FloatField(help_text="epoch seconds")
+    end = serializers.FloatField(help_text="epoch seconds")
+
+
 class TimelineOut(serializers.Serializer):
     start = serializers.FloatField(help_text="epoch seconds")
     end = serializers.FloatField(help_text="epoch seconds")
     segments = TimelineSegmentOut(many=True)
     totals = serializers.DictField(child=serializers.FloatField(), help_text="Seconds spent per state")
+    spans = SpanOut(many=True, help_text="When anything was recorded at all; only these count")
+
+
+class MessagesIn(RangeIn):
+    limit = serializers.IntegerField(required=False, min_value=1, max_value=MESSAGES_MAX, default=MESSAGES_MAX)
+
+
+class MessageOut(serializers.Serializer):
+    t = serializers.FloatField(help_text="epoch seconds (UTC) when it was received")
+    data = serializers.DictField(help_text="The message as recorded")
+
+
+class MessagesOut(serializers.Serializer):
+    topic = serializers.CharField()
+    messages = MessageOut(many=True, help_text="Newest first")
+    truncated = serializers.BooleanField(help_text="More messages in the range than limit")
 
 
 class TimelineIn(serializers.Serializer):

@@ -11,7 +11,8 @@ def index(request):
     emotion = ri.topic("emotional_state").name
     config = {
         "topics": [
-            {"topic": t["topic"], "msg_type": t["msg_type"], "fields": t["fields"]} for t in recorded_topics()
+            {"topic": t["topic"], "msg_type": t["msg_type"], "fields": t["fields"], "text": t["text"]}
+            for t in recorded_topics()
         ],
         "presets": {
             "battery": {"topic": ri.topic("battery_soc").name, "fields": ["data"], "scale": 100, "unit": "%",
@@ -23,6 +24,7 @@ def index(request):
         "urls": {
             "samples": reverse("history-samples"),
             "timeline": reverse("history-timeline"),
+            "messages": reverse("history-messages"),
             "export": reverse("history-export"),
         },
     }

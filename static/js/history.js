@@ -1,14 +1,18 @@
 // The plots page: downsampled series from the history API drawn with uPlot
-// (mean line, min/max band so spikes stay visible), presets, state timeline, exports.
+// (mean line, min/max band so spikes stay visible; zooming fetches finer buckets),
+// text topics as a table of messages, presets, state timeline, exports.
 import { getJSON, notify } from "./api.js";
 import { readConfig } from "./config.js";
-import { formatDuration } from "./time.js";
+import { formatDuration, formatTime, zoneLabel } from "./time.js";
 
 const config = readConfig("history-config");
 const $ = (id) => document.getElementById(id);
 const RANGES = { hour: 3600, day: 86400, week: 7 * 86400 };
 const COLORS = ["#2563eb", "#dc2626", "#059669", "#d97706", "#7c3aed"];
+const TABLE = "@messages"; // the Field choice that shows a topic's messages as a table
+const MESSAGES_LIMIT = 500;
 let chart = null;
+let shown = null; // what the chart shows: {topic, fields, opts}
 
 function fillTopics(selected) {
   const topics = $("topic");
@@ -20,8 +24,23 @@ function fillTopics(selected) {
 function fillFields(selected) {
   const topic = config.topics.find((t) => t.topic === $("topic").value);
   const fields = topic ? topic.fields : [];
-  $("field").replaceChildren(...fields.map((f) => new Option(f, f)));
-  if (selected && fields.includes(selected)) $("field").value = selected;
+  const options = fields.map((f) => new Option(f, f));
+  const text = topic && (topic.text || !fields.length);
+  if (text) options.unshift(new Option("messages (table)", TABLE));
+  $("field").replaceChildren(...options);
+  if (selected && (fields.includes(selected) || selected === TABLE)) $("field").value = selected;
+  else if (text) $("field").value = TABLE;
+}
+
+// Show one of the three views (chart, timeline, messages); the others go away.
+function showView(name) {
+  for (const view of ["chart", "timeline", "messages"]) $(view).hidden = view !== name;
+  if (name !== "chart") {
+    if (chart) { chart.destroy(); chart = null; }
+    shown = null;
+  }
+  $("zoom-out").hidden = true;
+  $("zoom-hint").hidden = name !== "chart";
 }
 
 function range() {
@@ -73,25 +92,101 @@ function draw(fields, data, unit) {
     width: el.clientWidth || 800, height: 360, series, bands,
     scales: { x: { time: true } }, axes: [{}, { label: unit || undefined }],
     legend: { live: true },
+    // A drag selects a stretch; we fetch finer buckets for it rather than stretch the coarse ones.
+    cursor: { drag: { x: true, y: false, setScale: false } },
+    hooks: { setSelect: [onSelect] },
   }, data, el);
 }
 
-async function plot(topic, fields, { scale = 1, unit = "" } = {}) {
-  $("timeline").hidden = true;
-  $("chart").hidden = false;
+function onSelect(u) {
+  if (u.select.width < 4 || !shown) return;
+  const start = u.posToVal(u.select.left, "x");
+  const end = u.posToVal(u.select.left + u.select.width, "x");
+  u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
+  zoomTo(start, end);
+}
+
+async function fetchSeries(topic, fields, r, scale) {
+  const results = await Promise.all(fields.map((f) => getJSON(seriesURL(topic, f, r))));
+  return { results, data: align(results, scale), points: results.reduce((acc, x) => acc + x.t.length, 0) };
+}
+
+function describe(topic, results) {
+  const samples = results[0].count.reduce((a, b) => a + b, 0);
+  return `${topic}: ${samples} samples in ${results[0].t.length} buckets of ${results[0].bucket_s} s`;
+}
+
+async function zoomTo(start, end) {
+  const { topic, fields, opts } = shown;
+  try {
+    const { results, data, points } = await fetchSeries(topic, fields, { start, end }, opts.scale ?? 1);
+    if (!points) { notify("Nothing was recorded in that stretch.", "warn"); return; }
+    chart.setData(data, false);
+    chart.setScale("x", { min: start, max: end });
+    $("zoom-out").hidden = false;
+    $("plot-info").textContent = `${describe(topic, results)} (zoomed)`;
+  } catch (err) {
+    notify(err.message, "error");
+  }
+}
+
+async function plot(topic, fields, opts = {}) {
+  const { scale = 1, unit = "" } = opts;
+  showView("chart");
+  if (chart) { chart.destroy(); chart = null; }
   const r = range();
   $("plot-info").textContent = "Loading…";
   try {
-    const results = await Promise.all(fields.map((f) => getJSON(seriesURL(topic, f, r))));
-    const n = results.reduce((acc, x) => acc + x.t.length, 0);
-    if (!n) {
-      if (chart) { chart.destroy(); chart = null; }
+    const { results, data, points } = await fetchSeries(topic, fields, r, scale);
+    if (!points) {
       $("plot-info").textContent = `No recorded samples of ${topic} in this range.`;
       return;
     }
-    draw(fields, align(results, scale), unit);
-    const samples = results[0].count.reduce((a, b) => a + b, 0);
-    $("plot-info").textContent = `${topic}: ${samples} samples in ${results[0].t.length} buckets of ${results[0].bucket_s} s`;
+    draw(fields, data, unit);
+    shown = { topic, fields, opts };
+    $("plot-info").textContent = describe(topic, results);
+  } catch (err) {
+    $("plot-info").textContent = "";
+    notify(err.message, "error");
+  }
+}
+
+// A message as table cells: its leaves by dotted path (headers left out, arrays as JSON).
+function flatten(msg, prefix = "", out = {}) {
+  for (const [key, value] of Object.entries(msg ?? {})) {
+    if (key === "header") continue;
+    if (value && typeof value === "object" && !Array.isArray(value)) flatten(value, `${prefix}${key}.`, out);
+    else out[`${prefix}${key}`] = Array.isArray(value) ? JSON.stringify(value) : String(value);
+  }
+  return out;
+}
+
+function cell(tag, text) {
+  const el = document.createElement(tag);
+  el.textContent = text;
+  return el;
+}
+
+async function messages(topic) {
+  showView("messages");
+  $("messages-head").replaceChildren();
+  $("messages-rows").replaceChildren();
+  $("plot-info").textContent = "Loading…";
+  try {
+    const r = range();
+    const q = new URLSearchParams({ topic, start: r.start, end: r.end, limit: MESSAGES_LIMIT });
+    const data = await getJSON(`${config.urls.messages}?${q}`);
+    const rows = data.messages.map((m) => ({ t: m.t, cells: flatten(m.data) }));
+    const columns = [...new Set(rows.flatMap((row) => Object.keys(row.cells)))];
+    $("messages-head").replaceChildren(cell("th", `Time (${zoneLabel()})`), ...columns.map((c) => cell("th", c)));
+    $("messages-rows").replaceChildren(...rows.map((row) => {
+      const tr = document.createElement("tr");
+      tr.append(cell("td", formatTime(row.t)), ...columns.map((c) => cell("td", row.cells[c] ?? "")));
+      return tr;
+    }));
+    $("plot-info").textContent = rows.length
+      ? `${topic}: ${rows.length} messages, newest first${data.truncated ? ` (the newest ${MESSAGES_LIMIT}; narrow the range for older ones)` : ""}`
+      : `No recorded messages of ${topic} in this range.`;
   } catch (err) {
     $("plot-info").textContent = "";
     notify(err.message, "error");
@@ -102,9 +197,7 @@ async function timeline() {
   const r = range();
   try {
     const data = await getJSON(`${config.urls.timeline}?${new URLSearchParams(r)}`);
-    if (chart) { chart.destroy(); chart = null; }
-    $("chart").hidden = true;
-    $("timeline").hidden = false;
+    showView("timeline");
     const total = Object.values(data.totals).reduce((a, b) => a + b, 0);
     const states = Object.keys(data.totals).sort((a, b) => data.totals[b] - data.totals[a]);
     const color = (state) => COLORS[states.indexOf(state) % COLORS.length];
@@ -127,7 +220,9 @@ async function timeline() {
       tr.firstChild.style.borderLeft = `6px solid ${color(state)}`;
       return tr;
     }));
-    $("plot-info").textContent = states.length ? `State machine, ${formatDuration(total)} covered` : "No recorded state changes in this range.";
+    $("plot-info").textContent = states.length
+      ? `State machine, ${formatDuration(total)} recorded in this range (time without any recording is left out)`
+      : "No recorded state changes in this range.";
   } catch (err) {
     notify(err.message, "error");
   }
@@ -155,9 +250,19 @@ $("topic").addEventListener("change", () => fillFields());
 $("range").addEventListener("change", () => { $("custom-range").hidden = $("range").value !== "custom"; });
 $("plot-form").addEventListener("submit", (ev) => {
   ev.preventDefault();
-  if (!$("topic").value || !$("field").value) { notify("Pick a recorded topic and a numeric field.", "warn"); return; }
-  plot($("topic").value, [$("field").value]);
+  const topic = $("topic").value;
+  const field = $("field").value;
+  if (!topic) { notify("Nothing recorded to show yet.", "warn"); return; }
+  try {
+    range();
+  } catch (err) {
+    notify(err.message, "warn");
+    return;
+  }
+  if (field === TABLE || !field) messages(topic);
+  else plot(topic, [field]);
 });
+$("zoom-out").addEventListener("click", () => shown && plot(shown.topic, shown.fields, shown.opts));
 document.querySelectorAll("[data-preset]").forEach((btn) => btn.addEventListener("click", () => preset(btn.dataset.preset)));
 document.querySelectorAll("[data-format]").forEach((a) => a.addEventListener("click", (ev) => {
   ev.preventDefault();

@@ -31,7 +31,7 @@ def test_it_shows_the_plots_page_with_presets_to_viewers(viewer):
     assert config["presets"]["battery"]["topic"] == ri.topic("battery_soc").name
     assert config["presets"]["pad"]["fields"] == ["current_pleasure", "current_arousal", "current_dominance"]
     assert config["topics"] == [{"topic": ri.topic("battery_soc").name, "msg_type": "std_msgs/Float32",
-                                 "fields": ["data"]}]
+                                 "fields": ["data"], "text": False}]
 
 
 def test_it_links_admins_to_the_policies(admin_user):
@@ -138,3 +138,31 @@ def test_it_explains_an_empty_history(client, viewer):
     body = client.get("/history/").content.decode()
     assert 'id="history-empty"' in body
     assert "recording policies</a>" not in body.split('id="history-empty"')[1].split("</p>")[0]
+
+
+def test_it_serves_a_text_topics_messages_newest_first(viewer_api):
+    topic = ri.topic("text_to_speech")
+    t0 = time.time() - 60
+    write_rows([(topic.name, topic.type, t0 + i, json.dumps({"data": f"line {i}"})) for i in range(5)])
+
+    res = viewer_api.get("/api/history/messages/", {"topic": topic.name, "start": t0 - 1, "limit": 3})
+
+    assert res.status_code == 200
+    body = res.json()
+    assert [m["data"]["data"] for m in body["messages"]] == ["line 4", "line 3", "line 2"]
+    assert body["truncated"] is True
+    assert body["messages"][0]["t"] == pytest.approx(t0 + 4, abs=0.001)
+
+
+def test_it_marks_text_topics_for_the_table_view(viewer):
+    speech, battery = ri.topic("text_to_speech"), ri.topic("battery_soc")
+    for t in (speech, battery):
+        TopicPolicy.objects.create(topic=t.name, msg_type=t.type, mode=Mode.EVERY)
+    write_rows([(speech.name, speech.type, time.time(), '{"data": "hi"}'),
+                (battery.name, battery.type, time.time(), '{"data": 0.5}')])
+
+    html = _client(viewer).get("/history/").content.decode()
+
+    config = json.loads(html.split('id="history-config" type="application/json">')[1].split("</script>")[0])
+    assert {t["topic"]: (t["fields"], t["text"]) for t in config["topics"]} == {
+        speech.name: ([], True), battery.name: (["data"], False)}

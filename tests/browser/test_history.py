@@ -1,0 +1,129 @@
+"""The History page in a real browser: the state timeline counts only what was recorded,
+zooming fetches finer buckets, From/To only for a custom range, text topics as a table."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.browser.support import login
+
+pytestmark = pytest.mark.browser
+
+DESKTOP = {"width": 1366, "height": 800}
+PHONE = {"width": 390, "height": 844}
+
+# Ten minutes of a robot that started ten minutes ago: a level every second, a startup that
+# took 15 s, two things said. Policies are off so the live stack records nothing more of them.
+SEED = """
+import json, time
+from history.models import TopicPolicy, Sample
+from history.storage import write_rows
+now = time.time()
+Sample.objects.filter(topic__startswith="/test/").delete()
+for topic, msg_type in (("/test/level", "std_msgs/Float32"), ("/test/speech", "std_msgs/String")):
+    TopicPolicy.objects.update_or_create(topic=topic, defaults={"msg_type": msg_type, "mode": "off"})
+began = now - 600
+rows = [("/test/level", "std_msgs/Float32", began + i, json.dumps({"data": (i % 60) / 60})) for i in range(600)]
+rows += [("/test/speech", "std_msgs/String", now - 300, '{"data": "Hello there"}'),
+         ("/test/speech", "std_msgs/String", now - 100, '{"data": "Going to the kitchen"}')]
+rows += [("/cyborg_controller/state_change", "cyborg_controller/SystemState", began + at,
+          json.dumps({"event": e, "from_system_state": a, "to_system_state": b}))
+         for at, e, a, b in ((0, "", "", "startup"), (15, "succeeded", "startup", "suspension"))]
+write_rows(rows)
+"""
+
+
+@pytest.fixture(scope="module")
+def seeded(stack):
+    stack.manage("shell", "-c", SEED)
+    return stack
+
+
+@pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
+def sized_page(request, browser):
+    phone = request.param is PHONE
+    context = browser.new_context(viewport=request.param, is_mobile=phone, has_touch=phone)
+    page = context.new_page()
+    page.set_default_timeout(15_000)
+    yield page
+    context.close()
+
+
+def timeline_rows(page) -> dict[str, str]:
+    rows = page.locator("#timeline-rows tr")
+    expect(rows.first).to_be_visible()
+    return {r.locator("td").nth(0).inner_text(): r.locator("td").nth(1).inner_text() for r in rows.all()}
+
+
+def test_history_shows_what_was_recorded_without_stale_views(sized_page, seeded):
+    page = sized_page
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.on("dialog", lambda d: errors.append(f"dialog: {d.message}"))
+    login(page, seeded, "vera", next_path="/history/")
+
+    # From/To only for a custom range.
+    expect(page.locator("#start")).to_be_hidden()
+    page.select_option("#range", "custom")
+    expect(page.locator("#start")).to_be_visible()
+    page.select_option("#range", "day")
+    expect(page.locator("#start")).to_be_hidden()
+
+    # The timeline of a robot that ran ten minutes in the last day: ten minutes, not a day.
+    page.click("[data-preset=timeline]")
+    rows = timeline_rows(page)
+    assert rows.get("startup") == "15.0 s", rows
+    assert rows.get("suspension", "").endswith(" min") and 9.0 <= float(rows["suspension"].split()[0]) <= 10.0, rows
+    expect(page.locator("#plot-info")).to_contain_text("recorded in this range")
+
+    # A number plots; then a text topic shows as a table, and the plot goes away.
+    page.select_option("#topic", "/test/level")
+    page.click("#plot-form button[type=submit]")
+    expect(page.locator("#chart .uplot")).to_be_visible()
+    expect(page.locator("#timeline")).to_be_hidden()
+    page.select_option("#topic", "/test/speech")
+    expect(page.locator("#field")).to_have_value("@messages")
+    assert page.evaluate("document.getElementById('plot-form').checkValidity()") is True
+    page.click("#plot-form button[type=submit]")
+    expect(page.locator("#messages")).to_be_visible()
+    expect(page.locator("#chart")).to_be_hidden()
+    expect(page.locator("#messages-rows tr")).to_have_count(2)
+    expect(page.locator("#messages-rows tr").first).to_contain_text("Going to the kitchen")
+    expect(page.locator("#messages-head")).to_contain_text("Time (")
+    expect(page.locator("#plot-info")).to_contain_text("2 messages, newest first")
+    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth"), "the page scrolls sideways"
+    assert errors == []
+
+
+def test_zooming_fetches_finer_buckets(browser, seeded):
+    context = browser.new_context(viewport=DESKTOP)
+    page = context.new_page()
+    page.set_default_timeout(15_000)
+    try:
+        login(page, seeded, "vera", next_path="/history/")
+        page.select_option("#topic", "/test/level")
+        page.click("#plot-form button[type=submit]")
+        expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
+        requests: list[str] = []
+        page.on("request", lambda r: "/api/history/samples/" in r.url and requests.append(r.url))
+        over = page.locator("#chart .u-over")
+        box = over.bounding_box()
+        assert box is not None
+        # The ten recorded minutes are the plot's last pixels of a day; pick the plot's right
+        # edge, where the data is, after first zooming to the last hour's worth of the x axis.
+        page.mouse.move(box["x"] + box["width"] * 0.5, box["y"] + box["height"] / 2)
+        page.mouse.down()
+        page.mouse.move(box["x"] + box["width"] - 1, box["y"] + box["height"] / 2, steps=5)
+        page.mouse.up()
+        expect(page.locator("#plot-info")).to_contain_text("(zoomed)")
+        assert len(requests) == 1, requests
+        text = page.locator("#plot-info").inner_text()
+        width_s = float(text.split("buckets of ")[1].split(" s")[0])
+        assert width_s < 60, text
+        expect(page.locator("#zoom-out")).to_be_visible()
+        page.click("#zoom-out")
+        expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
+        expect(page.locator("#zoom-out")).to_be_hidden()
+    finally:
+        context.close()
