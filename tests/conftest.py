@@ -10,7 +10,7 @@ from channels.layers import channel_layers
 from django.conf import settings as django_settings
 
 from cyborg_site.roles import Role
-from tests.browser.support import browser, page, stack  # noqa: F401  (shared session fixtures)
+from tests.browser.support import browser, page, sized_page, stack  # noqa: F401  (shared session fixtures)
 from tests.helpers import async_wait_until, wait_until
 
 PASSWORD = "correct-horse-battery"

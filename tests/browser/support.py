@@ -38,6 +38,21 @@ def browser():
         instance.close()
 
 
+DESKTOP = {"width": 1366, "height": 800}
+PHONE = {"width": 390, "height": 844}
+
+
+@pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
+def sized_page(request, browser):
+    """A page at a desktop and at a phone width (the test runs once for each)."""
+    phone = request.param is PHONE
+    context = browser.new_context(viewport=request.param, is_mobile=phone, has_touch=phone)
+    page = context.new_page()
+    page.set_default_timeout(15_000)
+    yield page
+    context.close()
+
+
 @pytest.fixture
 def page(browser):
     context = browser.new_context(viewport={"width": 1280, "height": 900})

@@ -6,12 +6,9 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.browser.support import login
+from tests.browser.support import DESKTOP, login
 
 pytestmark = pytest.mark.browser
-
-DESKTOP = {"width": 1366, "height": 800}
-PHONE = {"width": 390, "height": 844}
 
 # Ten minutes of a robot that started ten minutes ago: a level every second, a startup that
 # took 15 s, two things said. Policies are off so the live stack records nothing more of them.
@@ -38,16 +35,6 @@ write_rows(rows)
 def seeded(stack):
     stack.manage("shell", "-c", SEED)
     return stack
-
-
-@pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
-def sized_page(request, browser):
-    phone = request.param is PHONE
-    context = browser.new_context(viewport=request.param, is_mobile=phone, has_touch=phone)
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    yield page
-    context.close()
 
 
 def timeline_rows(page) -> dict[str, str]:

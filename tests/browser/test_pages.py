@@ -10,8 +10,6 @@ from tests.browser.support import login
 pytestmark = pytest.mark.browser
 
 PAGES = ("/", "/map/", "/drive/", "/history/", "/activity/")
-DESKTOP = {"width": 1366, "height": 800}
-PHONE = {"width": 390, "height": 844}
 
 
 # Records the URL of every websocket the document opens.
@@ -22,16 +20,6 @@ COUNT_SOCKETS = """(() => {
         constructor(url, ...rest) { super(url, ...rest); window.openedSockets.push(String(url)); }
     };
 })()"""
-
-
-@pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
-def sized_page(request, browser):
-    phone = request.param is PHONE
-    context = browser.new_context(viewport=request.param, is_mobile=phone, has_touch=phone)
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    yield page
-    context.close()
 
 
 def test_every_page_runs_without_errors_on_one_live_socket(sized_page, stack):
