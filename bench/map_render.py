@@ -1,7 +1,7 @@
 """How fast a map gets from the robot to a browser's screen.
 
 1. In process, for the default (400x300) and the large (4000x4000) simulator maps: decoding
-   the rosbridge frame as the link does (``robot.wire.decode_frame``: the grid's integers
+   the rosbridge frame as the link does (``robot.link.wire.decode_frame``: the grid's integers
    parsed by numpy, not ``json``), conversion + versioning, rendering, and the sum (message
    to image). ``*_json_decode_ms`` is what plain ``json.loads`` (roslibpy's own) would take.
 2. The real product (simulator + Daphne, ``tests/stack.py``) with a real headless Chromium:
@@ -31,9 +31,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from robot import interface as ri  # noqa: E402
+from robot.link.wire import decode_frame  # noqa: E402
 from robot.navigation.mapimage import render_map  # noqa: E402
 from robot.sim import messages, world  # noqa: E402
-from robot.wire import decode_frame  # noqa: E402
 from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, login  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 
@@ -149,7 +149,7 @@ def live_update(browser, stack: Stack, w: world.WorldMap) -> tuple[float, float]
                     && img.src.endsWith(root.dataset.mapVersion + '.png');
             }""", arg=old, timeout=60_000, polling=5)
         shown = time.time()
-        arrived, line = log_line(stack, "robot.rosclient: received a ", nth=2)
+        arrived, line = log_line(stack, "robot.link.rosclient: received a ", nth=2)
         return (shown - arrived) * 1000, (shown - arrived) * 1000 + receive_ms(line)
     finally:
         context.close()
@@ -169,7 +169,7 @@ def end_to_end(browser, name: str, sim_args: tuple[str, ...], *, large: bool) ->
         ready = log_time(stack, "robot.navigation.handlers: map ")
         probe.running = False
         if large:  # small frames are decoded where they arrive, without a log line
-            arrived, line = log_line(stack, "robot.rosclient: received a ")
+            arrived, line = log_line(stack, "robot.link.rosclient: received a ")
             print(f"{name}_frame_receive_ms: {receive_ms(line):.0f}")
             print(f"{name}_frame_to_server_image_ms: {(ready - arrived) * 1000:.0f}")
         cold, cached = first_paint(browser, stack)

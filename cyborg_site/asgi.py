@@ -11,7 +11,7 @@ from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
-from robot.hosting import autostart_in_daphne  # noqa: E402
+from robot.link.hosting import autostart_in_daphne  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
@@ -20,7 +20,7 @@ application = ProtocolTypeRouter(
     }
 )
 
-# Same autobahn ordering issue as the robot link (robot/link.py): without a class default,
+# Same autobahn ordering issue as the robot link (robot/link/connection.py): without a class default,
 # browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
 WebSocketProtocol.tcpNoDelay = True
 

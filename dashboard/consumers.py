@@ -11,9 +11,9 @@ from cyborg_site.roles import is_operator
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.live import SERVER_KEYS, live_frame, status_frame, watchable_keys
 from robot import interface as ri
-from robot.bus import RobotError, arequest
-from robot.groups import STATUS_GROUP, topic_group
-from robot.state import STATUS_KEY, get_store
+from robot.link.bus import RobotError, arequest
+from robot.live.groups import STATUS_GROUP, topic_group
+from robot.live.state import STATUS_KEY, get_store
 
 UNAUTHENTICATED = 4401
 

@@ -14,7 +14,7 @@ from django.conf import settings
 from django.db import connection
 
 from robot.api.errors import UNAVAILABLE_TEXT, unavailable
-from robot.state import link_status
+from robot.live.state import link_status
 
 PING_TIMEOUT_S = 1.0
 

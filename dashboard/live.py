@@ -6,8 +6,8 @@ from typing import Any
 
 from robot import interface as ri
 from robot.commands.modes import MODE_REQUEST_KEY
+from robot.live.state import status_view
 from robot.navigation.shared import SERVER_KEYS as NAVIGATION_KEYS
-from robot.state import status_view
 from robot.teleop.latch import LATCH_KEY
 
 # Whole occupancy grids are far too big for a browser socket; the map page gets an image.

@@ -12,7 +12,7 @@ from django.urls import path
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
 from history.storage import samples_deleted
-from robot.bus import RobotError, acall_service
+from robot.link.bus import RobotError, acall_service
 
 
 @admin.register(RecordingSettings)

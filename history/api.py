@@ -24,7 +24,7 @@ from history.models import RecordingSettings, TopicPolicy
 from history.policies import default_interval_set, effective_interval, policies_add_discovered, policy_upsert
 from history.selectors import recorded_messages, recorded_topics, state_timeline
 from robot import interface as ri
-from robot.bus import acall_service
+from robot.link.bus import acall_service
 
 
 class AdminWrites(permissions.BasePermission):

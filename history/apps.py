@@ -8,7 +8,7 @@ class HistoryConfig(AppConfig):
     def ready(self) -> None:
         from history.recorder import run_recorder
         from history.sampling import run_schedule
-        from robot.hosting import register_background
+        from robot.link.hosting import register_background
 
         # The recorder runs wherever the link runs; with REDIS_URL, Celery beat samples instead.
         register_background("history-recorder", run_recorder)

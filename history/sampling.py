@@ -37,7 +37,7 @@ def _is_due(t: float, last: float, interval_s: float) -> bool:
 def sample_periodic(*, store: Any = None) -> int:
     """Store the newest message of each periodic topic whose interval has passed; returns rows stored."""
     if store is None:
-        from robot.state import get_store
+        from robot.live.state import get_store
 
         store = get_store()
     periodic = [p for p in load_policies().values() if p.mode == Mode.PERIODIC]

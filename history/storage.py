@@ -24,7 +24,7 @@ from django.db.models import BigIntegerField, ExpressionWrapper, F
 from cyborg_site.text import scrub
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
-from robot.wire import jsonable
+from robot.link.wire import jsonable
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")

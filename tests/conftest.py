@@ -96,7 +96,7 @@ def _private_redis_prefix():
 def _fresh_layer_and_store(_private_redis_prefix):
     """Each test gets an empty channel layer and latest-state store."""
     from robot import interface
-    from robot.state import get_store, reset_store
+    from robot.live.state import get_store, reset_store
 
     channel_layers.backends = {}
     reset_store()
@@ -120,8 +120,8 @@ def sim():
 @pytest.fixture
 async def link(sim, settings):
     """The robot link hosted on the test's event loop, connected to ``sim`` (no background services)."""
-    from robot import link as link_module
-    from robot.hosting import start_link
+    from robot.link import connection as link_module
+    from robot.link.hosting import start_link
 
     settings.ROSBRIDGE_URL = sim.url
     hosted, tasks = await start_link(embedded=True, background=False)
@@ -144,7 +144,7 @@ class LinkThread:
         self.tasks: list = []
 
     def start(self):
-        from robot.hosting import start_link
+        from robot.link.hosting import start_link
 
         self.thread.start()
         self.link, self.tasks = asyncio.run_coroutine_threadsafe(
@@ -154,7 +154,7 @@ class LinkThread:
         return self.link
 
     def stop(self) -> None:
-        from robot import link as link_module
+        from robot.link import connection as link_module
 
         async def _stop():
             for task in self.tasks:

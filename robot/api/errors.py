@@ -23,7 +23,7 @@ from rest_framework.response import Response
 from rest_framework.views import exception_handler
 
 from cyborg_site.text import character_problem, scrub, scrub_json
-from robot.bus import RobotError
+from robot.link.bus import RobotError
 
 API_PREFIX = "/api/"
 # Deeper JSON than this is refused as a whole (no API input nests beyond a few levels).

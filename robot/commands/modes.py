@@ -32,14 +32,14 @@ from typing import Any
 from channels.layers import get_channel_layer
 from django.conf import settings
 
-from robot import bus
 from robot import interface as ri
-from robot.commanding import Busy, arun_command
 from robot.commands import moderoute
+from robot.commands.pipeline import Busy, arun_command
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
-from robot.groups import topic_group
-from robot.state import get_store
+from robot.link import bus
+from robot.live.groups import topic_group
+from robot.live.state import get_store
 from robot.teleop.latch import ensure_released
 
 # Latest-state key (server-side, not a ROS topic) holding the last requested mode.

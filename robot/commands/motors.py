@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from robot import bus
 from robot import interface as ri
-from robot.commanding import arun_command
+from robot.commands.pipeline import arun_command
 from robot.commands.validation import clean_bool
+from robot.link import bus
 from robot.teleop.latch import ensure_released
 
 

@@ -13,8 +13,8 @@ from django.db.models import QuerySet
 from dashboard.selectors import HOME_KEYS
 from robot import interface as ri
 from robot.commands.modes import MODE_REQUEST_KEY, state_reached
+from robot.live.state import STATUS_KEY, get_store, status_view
 from robot.models import AuditEntry
-from robot.state import STATUS_KEY, get_store, status_view
 
 STATE_KEYS = (*HOME_KEYS, MODE_REQUEST_KEY)
 

@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from robot.state import StateStore, get_store
+from robot.live.state import StateStore, get_store
 
 KEY = "state_change"
 POLL_S = 0.02

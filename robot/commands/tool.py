@@ -12,10 +12,10 @@ import inspect
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from robot import bus
 from robot import interface as ri
-from robot.commanding import arun_command
 from robot.commands import validation as v
+from robot.commands.pipeline import arun_command
+from robot.link import bus
 from robot.teleop.latch import ensure_released
 
 

@@ -13,7 +13,7 @@ from asgiref.sync import sync_to_async
 
 from cyborg_site.text import EMPTY, TextRejected, clean_text
 from robot import interface as ri
-from robot.commanding import InvalidCommand
+from robot.commands.pipeline import InvalidCommand
 from robot.models import DomeMode, EmotionPreset, SoundClip
 
 EVENT_MAX = 64

@@ -14,7 +14,7 @@ from channels.layers import get_channel_layer
 from django.db import transaction
 from django.db.models.signals import post_delete, post_save
 
-from robot.groups import topic_group
+from robot.live.groups import topic_group
 from robot.models import Location
 from robot.navigation.selectors import location_list
 from robot.navigation.shared import LOCATIONS_KEY, server_update

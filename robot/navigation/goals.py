@@ -13,8 +13,8 @@ import uuid
 from typing import Any
 
 from robot import interface as ri
-from robot.bus import apublish, arequest
-from robot.commanding import arun_command
+from robot.commands.pipeline import arun_command
+from robot.link.bus import apublish, arequest
 from robot.navigation.selectors import anavigation_status
 from robot.navigation.shared import GOAL_KEY, aget_state, apublish_state
 from robot.navigation.status import TERMINAL_STATES, goal_view

@@ -13,9 +13,9 @@ import time
 from typing import Any
 
 from robot import interface as ri
-from robot import link as link_module
-from robot.hosting import register_background
-from robot.link import RobotLink
+from robot.link import connection as link_module
+from robot.link.connection import RobotLink
+from robot.link.hosting import register_background
 from robot.navigation.mapimage import MapError, RenderedMap, render_map
 from robot.navigation.shared import GOAL_STATUS_KEY, MAP_META_KEY, aget_state, apublish_state, map_dir
 from robot.navigation.status import merge_statuses

@@ -7,8 +7,8 @@ from typing import Any
 from channels.db import database_sync_to_async
 from django.conf import settings
 
-from robot.bus import RobotError
-from robot.commanding import InvalidCommand, arun_command
+from robot.commands.pipeline import InvalidCommand, arun_command
+from robot.link.bus import RobotError
 from robot.models import Location
 from robot.navigation.goals import asend_pose_goal, astart_goal, navigation_goal_message, new_goal_id
 from robot.navigation.selectors import pose_of

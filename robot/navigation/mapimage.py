@@ -65,7 +65,7 @@ def grid_array(msg: dict[str, Any]) -> tuple[MapGeometry, np.ndarray]:
     n = geometry.width * geometry.height
     if n <= 0 or len(data) != n or geometry.resolution <= 0:
         raise MapError(f"map of {geometry.width}x{geometry.height} cells came with {len(data)} values")
-    # A large map's data is already an ndarray (robot.wire); a small one is a list.
+    # A large map's data is already an ndarray (robot.link.wire); a small one is a list.
     try:
         values = data if isinstance(data, np.ndarray) else np.array(data, dtype=np.int32)
     except (OverflowError, TypeError, ValueError) as exc:

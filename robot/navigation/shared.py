@@ -14,8 +14,8 @@ from typing import Any
 from channels.layers import get_channel_layer
 from django.conf import settings
 
-from robot.groups import TopicUpdate, topic_group
-from robot.state import get_store
+from robot.live.groups import TopicUpdate, topic_group
+from robot.live.state import get_store
 
 MAP_META_KEY = "map_meta"
 GOAL_KEY = "nav_goal"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from robot.bus import RobotError
-from robot.commanding import InvalidCommand
+from robot.commands.pipeline import InvalidCommand
+from robot.link.bus import RobotError
 from robot.navigation.mapimage import OCCUPIED_AT, UNKNOWN, cell_value
 from robot.navigation.shared import MAP_META_KEY, aget_state, map_dir
 from robot.navigation.transforms import MapGeometry, map_bounds, map_to_cell, map_to_cell_coords

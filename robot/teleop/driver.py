@@ -18,8 +18,8 @@ from typing import Any
 
 from django.conf import settings
 
-from robot.bus import EstopEngaged, RobotError
-from robot.commanding import Busy, Forbidden, InvalidCommand
+from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
+from robot.link.bus import EstopEngaged, RobotError
 from robot.teleop.driving import LockEvent, announce, lock_acquire, lock_release, lock_takeover, teleop_record
 from robot.teleop.latch import alatch
 from robot.teleop.lock import DriveLock, Holder, get_lock

@@ -9,9 +9,9 @@ from channels.db import database_sync_to_async
 from channels.layers import get_channel_layer
 
 from cyborg_site.roles import is_admin
-from robot.audit import audit_record
-from robot.bus import EstopEngaged, RobotError
-from robot.commanding import Busy, arun_command
+from robot.commands.audit import audit_record
+from robot.commands.pipeline import Busy, arun_command
+from robot.link.bus import EstopEngaged, RobotError
 from robot.teleop.latch import ensure_released
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import publish_cmd_vel

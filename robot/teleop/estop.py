@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
-from robot.bus import RobotError, acall_service, arequest
-from robot.commanding import InvalidCommand, arun_command
 from robot.commands.modes import perform_mode
+from robot.commands.pipeline import InvalidCommand, arun_command
+from robot.link.bus import RobotError, acall_service, arequest
 from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
 from robot.teleop.latch import Latch, aengage, alatch, arecord_steps, arelease

@@ -16,10 +16,10 @@ from typing import Any
 from django.conf import settings
 from django.utils import timezone
 
-from robot.bus import EstopEngaged
-from robot.guard import LATCH_KEY
+from robot.link.bus import EstopEngaged
+from robot.link.guard import LATCH_KEY
+from robot.live.state import get_store
 from robot.navigation.shared import apublish_state
-from robot.state import get_store
 
 __all__ = ["LATCH_KEY", "EstopEngaged", "Latch"]
 

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 from django.conf import settings
 
-from robot.state import redis_key
+from robot.live.state import redis_key
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from collections.abc import Awaitable, Callable
 
 from django.conf import settings
 
-from robot.bus import RobotError, apublish
+from robot.link.bus import RobotError, apublish
 from robot.teleop.lock import DriveLock, Holder
 from robot.teleop.twist import STOP, Command, twist
 

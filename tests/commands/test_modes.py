@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from robot import interface as ri
-from robot.commanding import Busy
 from robot.commands import modes
+from robot.commands.pipeline import Busy
 from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 

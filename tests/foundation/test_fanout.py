@@ -1,6 +1,6 @@
 import asyncio
 
-from robot.fanout import Coalescer
+from robot.live.fanout import Coalescer
 
 
 async def test_it_forwards_the_latest_value_at_the_ui_rate():

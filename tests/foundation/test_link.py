@@ -5,8 +5,8 @@ import asyncio
 import pytest
 
 from robot import interface as ri
-from robot import link as link_module
-from robot.bus import RobotOffline, apublish, arequest
+from robot.link import connection as link_module
+from robot.link.bus import RobotOffline, apublish, arequest
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 BATTERY = "battery_soc"
@@ -122,7 +122,7 @@ async def test_it_refuses_to_watch_unknown_or_bulky_topics(link, viewer):
 
 
 async def test_it_replays_recent_log_lines_to_a_page_opened_later(link, sim, viewer):
-    from robot.state import get_store
+    from robot.live.state import get_store
 
     loop = asyncio.get_running_loop()
     for i in range(3):

@@ -6,8 +6,8 @@ import random
 import numpy as np
 import pytest
 
-from robot import wire
-from robot.wire import decode_frame, jsonable, parse_int_array
+from robot.link import wire
+from robot.link.wire import decode_frame, jsonable, parse_int_array
 
 MAP = "/map"
 ARRAYS = frozenset({MAP})

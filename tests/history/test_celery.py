@@ -11,7 +11,7 @@ from history.recorder import Recorder
 from history.sampling import latest_key
 from history.storage import utc, write_rows
 from history.tasks import celery_writer_for
-from robot.state import get_store
+from robot.live.state import get_store
 from tests.helpers import wait_until
 
 from .conftest import BURST_TOPIC, BURST_TYPE

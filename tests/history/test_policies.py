@@ -5,7 +5,7 @@ import pytest
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import default_interval_set, load_policies, policies_add_discovered, policy_upsert
 from history.sampling import latest_key, sample_periodic
-from robot.state import MemoryStore
+from robot.live.state import MemoryStore
 
 TOPIC = "/history_test/periodic"
 

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.django_db
 @pytest.fixture
 def private_redis(settings):
     """This test's own Redis, wired in as in the scaled deployment (whatever the suite's wiring)."""
-    from robot.state import reset_store
+    from robot.live.state import reset_store
 
     server = PrivateRedis()
     server.start()

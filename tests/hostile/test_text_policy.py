@@ -7,7 +7,7 @@ import pytest
 from django.db import connection
 
 from cyborg_site.text import TextRejected, clean_text, scrub, scrub_json, text_problem
-from robot.audit import audit_record
+from robot.commands.audit import audit_record
 from robot.models import AuditEntry
 from tests.commands.support import only_the_marker_arrived, sent_to_robot
 
@@ -66,7 +66,7 @@ def test_it_refuses_bad_text_with_the_field_and_never_sends_it(operator_api, rob
 
 
 def test_it_refuses_too_long_speech_over_the_live_command_path():
-    from robot.commanding import InvalidCommand
+    from robot.commands.pipeline import InvalidCommand
     from robot.commands.validation import clean_speech
 
     with pytest.raises(InvalidCommand) as caught:

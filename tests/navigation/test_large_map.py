@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from robot import interface as ri
-from robot import rosclient
+from robot.link import rosclient
+from robot.link.wire import LARGE_FRAME_BYTES
+from robot.live.state import get_store
 from robot.navigation.mapimage import grid_path
 from robot.navigation.shared import MAP_META_KEY, map_dir
-from robot.state import get_store
-from robot.wire import LARGE_FRAME_BYTES
 from tests.helpers import async_wait_until
 
 pytestmark = pytest.mark.django_db(transaction=True)

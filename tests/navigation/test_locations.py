@@ -3,8 +3,8 @@ import math
 import pytest
 
 from robot import interface as ri
+from robot.live.state import get_store
 from robot.models import Location
-from robot.state import get_store
 from tests.helpers import wait_until
 from tests.navigation.conftest import wait_goal_state
 

@@ -5,12 +5,12 @@ import json
 import pytest
 
 from robot import interface as ri
+from robot.live.state import get_store
 from robot.models import AuditEntry
 from robot.navigation.handlers import map_meta
 from robot.navigation.mapimage import render_map
 from robot.navigation.shared import MAP_META_KEY, map_dir
 from robot.sim import world
-from robot.state import get_store
 
 # Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
 # sits in a test transaction: these tests need real transactions.

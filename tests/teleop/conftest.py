@@ -11,7 +11,7 @@ def _free_drive_lock(settings):
         if settings.REDIS_URL:
             import redis
 
-            from robot.state import redis_key
+            from robot.live.state import redis_key
 
             redis.Redis.from_url(settings.REDIS_URL).delete(redis_key("teleop-lock"))
 

@@ -21,7 +21,7 @@ STAGE_GOAL = {"header": {"frame_id": ri.MAP_FRAME},
 @pytest.fixture
 def busy_robot(sim, link_thread):
     """The simulated robot in manual mode, driving to a goal, motors on."""
-    from robot.bus import publish
+    from robot.link.bus import publish
 
     wait_ready(sim)
     sim.call(lambda: sim.robot.fire(ri.Event.MANUAL_START))

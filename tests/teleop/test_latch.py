@@ -74,7 +74,7 @@ async def test_lock_requests_and_takeovers_are_refused_while_latched(link, sim, 
 
 
 async def test_the_link_refuses_motion_and_holds_zero_while_latched(link, sim, settings):
-    from robot.bus import EstopEngaged, apublish, arequest
+    from robot.link.bus import EstopEngaged, apublish, arequest
     from robot.teleop.twist import Command, twist
 
     await arequest("estop")
@@ -91,7 +91,7 @@ async def test_the_link_refuses_motion_and_holds_zero_while_latched(link, sim, s
 
 async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
     """A press while the link could not be told (another process, a dead command path)."""
-    from robot.bus import EstopEngaged, apublish
+    from robot.link.bus import EstopEngaged, apublish
     from robot.teleop.latch import aengage, arelease
     from robot.teleop.twist import Command, twist
 
@@ -104,7 +104,7 @@ async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
 
 
 async def test_the_link_stops_the_robot_when_moving_twists_stop_arriving(link, sim, settings):
-    from robot.bus import apublish
+    from robot.link.bus import apublish
     from robot.teleop.twist import Command, twist
 
     await apublish("cmd_vel", twist(Command(0.3, 0.0)))

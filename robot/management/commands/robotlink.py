@@ -3,7 +3,7 @@ import signal
 
 from django.core.management.base import BaseCommand
 
-from robot.hosting import start_link
+from robot.link.hosting import start_link
 
 
 class Command(BaseCommand):

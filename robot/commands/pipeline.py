@@ -13,8 +13,8 @@ from typing import Any
 from asgiref.sync import async_to_sync, sync_to_async
 
 from cyborg_site.roles import is_operator
-from robot.audit import audit_record
-from robot.bus import RobotError
+from robot.commands.audit import audit_record
+from robot.link.bus import RobotError
 
 # Not database_sync_to_async: it closes the calling thread's connection, which for a
 # synchronous caller (a DRF view calling run_command) is the request's own connection.

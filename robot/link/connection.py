@@ -17,8 +17,10 @@ from typing import Any
 import roslibpy
 
 from robot import interface as ri
-from robot.fanout import Coalescer
-from robot.groups import (
+from robot.link.guard import LATCH_KEY, CmdVelGuard
+from robot.link.rosclient import LinkRos
+from robot.live.fanout import Coalescer
+from robot.live.groups import (
     LINK_CHANNEL,
     STATUS_GROUP,
     LinkReply,
@@ -28,9 +30,7 @@ from robot.groups import (
     TopicUpdate,
     topic_group,
 )
-from robot.guard import LATCH_KEY, CmdVelGuard
-from robot.rosclient import LinkRos
-from robot.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
+from robot.live.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
 
 log = logging.getLogger(__name__)
 

@@ -14,7 +14,7 @@ from typing import Any, Protocol
 
 from django.conf import settings
 
-from robot.wire import jsonable
+from robot.link.wire import jsonable
 
 STATUS_KEY = "_link"
 

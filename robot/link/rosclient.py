@@ -19,7 +19,7 @@ import roslibpy
 from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 from roslibpy.core import Message
 
-from robot.wire import LARGE_FRAME_BYTES, decode_frame
+from robot.link.wire import LARGE_FRAME_BYTES, decode_frame
 
 log = logging.getLogger(__name__)
 

@@ -14,9 +14,9 @@ from collections.abc import Awaitable, Callable
 from channels.layers import get_channel_layer
 from django.conf import settings
 
-from robot import link as link_module
-from robot.link import RobotLink
-from robot.state import get_store
+from robot.link import connection as link_module
+from robot.link.connection import RobotLink
+from robot.live.state import get_store
 
 log = logging.getLogger(__name__)
 

@@ -17,10 +17,10 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot import interface as ri
-from robot import link as link_module
-from robot.groups import LINK_CHANNEL, LinkReply, LinkRequest
-from robot.link import RobotLink
-from robot.state import STATUS_KEY, get_store, status_view
+from robot.link import connection as link_module
+from robot.link.connection import RobotLink
+from robot.live.groups import LINK_CHANNEL, LinkReply, LinkRequest
+from robot.live.state import STATUS_KEY, get_store, status_view
 
 
 class RobotError(Exception):
