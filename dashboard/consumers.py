@@ -9,11 +9,12 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
 from dashboard.fastdispatch import NoDatabaseHopMixin
-from dashboard.live import SERVER_KEYS, live_frame, status_frame, watchable_keys
+from dashboard.live import live_frame, status_frame
 from robot import interface as ri
 from robot.link.bus import RobotError, arequest
-from robot.live.groups import STATUS_GROUP, topic_group
-from robot.live.state import STATUS_KEY, get_store
+from robot.live.groups import STATUS_GROUP, STATUS_KEY, topic_group
+from robot.live.keys import SERVER_KEYS, watchable_keys
+from robot.live.state import get_store
 
 UNAUTHENTICATED = 4401
 

@@ -11,8 +11,9 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
+from robot.live.groups import LOCK_GROUP
 from robot.teleop.driver import Driver
-from robot.teleop.driving import LOCK_GROUP, LockEvent
+from robot.teleop.driving import LockEvent
 
 
 class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):

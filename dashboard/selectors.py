@@ -7,14 +7,7 @@ from typing import Any
 from django.conf import settings
 
 from robot import interface as ri
-
-# What the dashboard home watches live.
-HOME_KEYS = (
-    "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
-    "state_change", "state_transitions", "emotional_state", "emotion_system_status",
-    "text_to_speech", "tts_feedback", "current_location", "rosout", "robot_pose",
-    "smach_status",
-)
+from robot.live.keys import HOME_KEYS
 
 
 def dashboard_context() -> dict[str, Any]:

@@ -8,6 +8,7 @@ from django.shortcuts import render
 from django.urls import reverse
 
 from dashboard.routing_teleop import TELEOP_SOCKET_PATH
+from robot.live.keys import DRIVE_KEYS
 
 
 def drive_config() -> dict[str, object]:
@@ -19,7 +20,7 @@ def drive_config() -> dict[str, object]:
         "stream_url": reverse("dashboard:video-stream"),
         "snapshot_url": reverse("dashboard:video-snapshot"),
         "teleop_socket": TELEOP_SOCKET_PATH,
-        "keys": ["odom", "robot_pose", "motors_state"],
+        "keys": list(DRIVE_KEYS),
     }
 
 

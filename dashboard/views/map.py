@@ -5,17 +5,14 @@ from django.urls import reverse
 from django.views.decorators.http import require_GET
 
 from robot import interface as ri
-from robot.navigation.mapimage import is_version, png_path
+from robot.live.keys import MAP_PAGE_KEYS
+from robot.navigation.mapimage import is_version, map_dir, png_path
 from robot.navigation.selectors import location_list, map_meta
-from robot.navigation.shared import SERVER_KEYS, map_dir
-
-# What the map page watches live, besides the server's own navigation keys.
-MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location")
 
 
 def map_page(request):
     config = {
-        "keys": [*MAP_PAGE_KEYS, *SERVER_KEYS],
+        "keys": list(MAP_PAGE_KEYS),
         "map": map_meta(),
         "locations": location_list(),
         "backend": settings.NAVIGATION_BACKEND,

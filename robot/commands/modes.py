@@ -23,13 +23,11 @@ from __future__ import annotations
 
 import asyncio
 import threading
-import time
 import uuid
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
-from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot import interface as ri
@@ -38,12 +36,11 @@ from robot.commands.pipeline import Busy, arun_command
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
 from robot.link import bus
-from robot.live.groups import topic_group
-from robot.live.state import get_store
+from robot.live.announce import apublish_state
+from robot.live.groups import MODE_REQUEST_KEY
+from robot.live.state import redis_key
 from robot.teleop.latch import ensure_released
 
-# Latest-state key (server-side, not a ROS topic) holding the last requested mode.
-MODE_REQUEST_KEY = "mode_request"
 # How long one step may take to show up on state_change, and how many steps a change may take
 # (the longest way out is sleeping → idle → suspension; the rest is room for states that move
 # on by themselves while we walk).
@@ -189,13 +186,10 @@ async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
 
 
 async def announce_request(mode: ri.Mode, *, by: str, status: str, error: str = "") -> None:
-    update = {
-        "type": "robot.update", "key": MODE_REQUEST_KEY, "topic": "", "msg_type": "", "t": time.time(),
-        "msg": {"mode": mode.short, "value": mode.value, "target_state": ri.MODE_TARGET_STATE[mode].value,
-                "by": by, "status": status, "error": error, "strategy": settings.MODE_COMMANDER},
-    }
-    await get_store().aput(MODE_REQUEST_KEY, dict(update))
-    await get_channel_layer().group_send(topic_group(MODE_REQUEST_KEY), update)
+    await apublish_state(MODE_REQUEST_KEY, {
+        "mode": mode.short, "value": mode.value, "target_state": ri.MODE_TARGET_STATE[mode].value,
+        "by": by, "status": status, "error": error, "strategy": settings.MODE_COMMANDER,
+    })
 
 
 # --- serialisation -----------------------------------------------------------------------
@@ -210,8 +204,7 @@ def _busy(holder: str) -> Busy:
 
 
 def _lock_key() -> str:
-    prefix = settings.CHANNEL_LAYERS["default"].get("CONFIG", {}).get("prefix", "cyborg")
-    return f"{prefix}:mode-change-lock"
+    return redis_key("mode-change-lock")
 
 
 @asynccontextmanager

@@ -10,13 +10,12 @@ from typing import Any
 
 from django.db.models import QuerySet
 
-from dashboard.selectors import HOME_KEYS
 from robot import interface as ri
-from robot.commands.modes import MODE_REQUEST_KEY, state_reached
-from robot.live.state import STATUS_KEY, get_store, status_view
+from robot.commands.modes import state_reached
+from robot.live.groups import MODE_REQUEST_KEY, STATUS_KEY
+from robot.live.keys import STATE_KEYS
+from robot.live.state import get_store, status_view
 from robot.models import AuditEntry
-
-STATE_KEYS = (*HOME_KEYS, MODE_REQUEST_KEY)
 
 
 def available_events(entry: dict[str, Any] | None) -> dict[str, str]:

@@ -19,8 +19,8 @@ from django.conf import settings
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.connection import RobotLink
-from robot.live.groups import LINK_CHANNEL, LinkReply, LinkRequest
-from robot.live.state import STATUS_KEY, get_store, status_view
+from robot.live.groups import LINK_CHANNEL, STATUS_KEY, LinkReply, LinkRequest
+from robot.live.state import get_store, status_view
 
 
 class RobotError(Exception):

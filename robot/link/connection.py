@@ -17,20 +17,21 @@ from typing import Any
 import roslibpy
 
 from robot import interface as ri
-from robot.link.guard import LATCH_KEY, CmdVelGuard
+from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos
+from robot.live.announce import aannounce
 from robot.live.fanout import Coalescer
 from robot.live.groups import (
+    LATCH_KEY,
     LINK_CHANNEL,
     STATUS_GROUP,
+    STATUS_KEY,
     LinkReply,
     LinkRequest,
     LinkStatus,
-    SharedMessage,
     TopicUpdate,
-    topic_group,
 )
-from robot.live.state import LINK_HEARTBEAT_S, STATUS_KEY, StateStore
+from robot.live.state import LINK_HEARTBEAT_S, StateStore
 
 log = logging.getLogger(__name__)
 
@@ -205,11 +206,8 @@ class RobotLink:
         self._coalescer.offer(topic.key, topic.ui_rate_hz, update)
 
     async def _send_update(self, update: TopicUpdate) -> None:
-        await self.store.aput(update["key"], dict(update))
-        recent = ri.topic(update["key"]).recent
-        if recent:
-            await self.store.aappend_recent(update["key"], dict(update), recent)
-        await self.layer.group_send(topic_group(update["key"]), {**update, "msg": SharedMessage(update["msg"])})
+        key = update["key"]
+        await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store, layer=self.layer)
 
     # --- connection status -----------------------------------------------------------
 
@@ -239,8 +237,7 @@ class RobotLink:
     async def _publish_status(self) -> None:
         status = self.status()
         try:
-            await self.store.aput(STATUS_KEY, dict(status))
-            await self.layer.group_send(STATUS_GROUP, status)
+            await aannounce(STATUS_KEY, dict(status), group=STATUS_GROUP, store=self.store, layer=self.layer)
         except Exception:
             log.exception("could not publish link status")
 

@@ -16,9 +16,6 @@ from typing import Any
 
 log = logging.getLogger(__name__)
 
-# The latest-state key of the E-STOP latch (written by robot.teleop.latch, read here too).
-LATCH_KEY = "estop"
-
 
 def is_zero_twist(msg: dict[str, Any]) -> bool:
     parts = (msg.get("linear") or {}, msg.get("angular") or {})

@@ -10,6 +10,17 @@ from typing import Any, Literal, TypedDict
 # The robot link listens on this channel for requests from web processes and tasks.
 LINK_CHANNEL = "robot-link"
 STATUS_GROUP = "robot.status"
+# Every drive page hears who holds the driving lock.
+LOCK_GROUP = "teleop.lock"
+
+# Latest-state keys the server writes itself (no ROS topic behind them).
+STATUS_KEY = "_link"  # the link's connection status
+MODE_REQUEST_KEY = "mode_request"  # the last requested mode
+MAP_META_KEY = "map_meta"  # the map's metadata (the grid itself never goes into the store)
+GOAL_KEY = "nav_goal"  # the goal this server sent last
+GOAL_STATUS_KEY = "nav_goal_status"  # what the robot reported for recent goals
+LOCATIONS_KEY = "nav_locations"  # sent on change only, never stored
+LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
 
 
 def topic_group(key: str) -> str:

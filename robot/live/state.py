@@ -15,8 +15,7 @@ from typing import Any, Protocol
 from django.conf import settings
 
 from robot.link.wire import jsonable
-
-STATUS_KEY = "_link"
+from robot.live.groups import STATUS_KEY
 
 
 class StateStore(Protocol):

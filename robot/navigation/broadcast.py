@@ -10,19 +10,17 @@ from __future__ import annotations
 from typing import Any
 
 from asgiref.sync import async_to_sync
-from channels.layers import get_channel_layer
 from django.db import transaction
 from django.db.models.signals import post_delete, post_save
 
-from robot.live.groups import topic_group
+from robot.live.announce import apublish_state
+from robot.live.groups import LOCATIONS_KEY
 from robot.models import Location
 from robot.navigation.selectors import location_list
-from robot.navigation.shared import LOCATIONS_KEY, server_update
 
 
 def broadcast_locations() -> None:
-    update = server_update(LOCATIONS_KEY, {"locations": location_list()})
-    async_to_sync(get_channel_layer().group_send)(topic_group(LOCATIONS_KEY), update)
+    async_to_sync(apublish_state)(LOCATIONS_KEY, {"locations": location_list()}, keep=False)
 
 
 def _changed(sender: type[Location], **kwargs: Any) -> None:

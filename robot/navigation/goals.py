@@ -15,8 +15,9 @@ from typing import Any
 from robot import interface as ri
 from robot.commands.pipeline import arun_command
 from robot.link.bus import apublish, arequest
+from robot.live.announce import aget_state, apublish_state
+from robot.live.groups import GOAL_KEY
 from robot.navigation.selectors import anavigation_status
-from robot.navigation.shared import GOAL_KEY, aget_state, apublish_state
 from robot.navigation.status import TERMINAL_STATES, goal_view
 from robot.navigation.transforms import normalize_angle, yaw_to_quaternion
 from robot.navigation.validation import POSE_FIELDS, acheck_position, audit_params, clean_yaw, number, only_fields

@@ -16,8 +16,9 @@ from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.connection import RobotLink
 from robot.link.hosting import register_background
-from robot.navigation.mapimage import MapError, RenderedMap, render_map
-from robot.navigation.shared import GOAL_STATUS_KEY, MAP_META_KEY, aget_state, apublish_state, map_dir
+from robot.live.announce import aget_state, apublish_state
+from robot.live.groups import GOAL_STATUS_KEY, MAP_META_KEY
+from robot.navigation.mapimage import MapError, RenderedMap, map_dir, render_map
 from robot.navigation.status import merge_statuses
 
 log = logging.getLogger(__name__)

@@ -9,10 +9,10 @@ from django.conf import settings
 
 from robot.commands.pipeline import InvalidCommand, arun_command
 from robot.link.bus import RobotError
+from robot.live.announce import aget_state
 from robot.models import Location
 from robot.navigation.goals import asend_pose_goal, astart_goal, navigation_goal_message, new_goal_id
 from robot.navigation.selectors import pose_of
-from robot.navigation.shared import aget_state
 from robot.navigation.status import goal_view
 from robot.teleop.latch import ensure_released
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from django.conf import settings
 from PIL import Image
 
 from robot.navigation.transforms import MapGeometry
@@ -29,6 +30,11 @@ _VERSION_CHARS = frozenset("0123456789abcdef")
 UNKNOWN_RGB = (205, 210, 217)
 FREE_RGB = (252, 252, 250)
 OCCUPIED_RGB = (34, 38, 46)
+
+
+def map_dir() -> Path:
+    """Where rendered maps live (shared by every process of one deployment)."""
+    return Path(settings.VAR_DIR) / "maps"
 
 
 def _palette() -> list[int]:

@@ -7,8 +7,9 @@ from typing import Any
 from asgiref.sync import async_to_sync
 from django.conf import settings
 
+from robot.live.announce import aget_state
+from robot.live.groups import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY
 from robot.models import Location
-from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY, aget_state
 from robot.navigation.status import goal_view
 from robot.navigation.transforms import quaternion_to_yaw
 

@@ -7,8 +7,9 @@ from typing import Any
 
 from robot.commands.pipeline import InvalidCommand
 from robot.link.bus import RobotError
-from robot.navigation.mapimage import OCCUPIED_AT, UNKNOWN, cell_value
-from robot.navigation.shared import MAP_META_KEY, aget_state, map_dir
+from robot.live.announce import aget_state
+from robot.live.groups import MAP_META_KEY
+from robot.navigation.mapimage import OCCUPIED_AT, UNKNOWN, cell_value, map_dir
 from robot.navigation.transforms import MapGeometry, map_bounds, map_to_cell, map_to_cell_coords
 
 

@@ -12,12 +12,11 @@ from cyborg_site.roles import is_admin
 from robot.commands.audit import audit_record
 from robot.commands.pipeline import Busy, arun_command
 from robot.link.bus import EstopEngaged, RobotError
+from robot.live.groups import LOCK_GROUP
 from robot.teleop.latch import ensure_released
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import publish_cmd_vel
 from robot.teleop.twist import STOP
-
-LOCK_GROUP = "teleop.lock"
 
 
 class LockEvent(TypedDict):

@@ -17,9 +17,9 @@ from django.conf import settings
 from django.utils import timezone
 
 from robot.link.bus import EstopEngaged
-from robot.link.guard import LATCH_KEY
+from robot.live.announce import apublish_state
+from robot.live.groups import LATCH_KEY
 from robot.live.state import get_store
-from robot.navigation.shared import apublish_state
 
 __all__ = ["LATCH_KEY", "EstopEngaged", "Latch"]
 

@@ -6,9 +6,9 @@ import asyncio
 
 import pytest
 
+from robot.live.groups import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY
 from robot.live.state import get_store
 from robot.navigation.handlers import track_goal_statuses
-from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, MAP_META_KEY
 from tests.conftest import LinkThread
 from tests.helpers import wait_until
 

@@ -8,9 +8,9 @@ import pytest
 from robot import interface as ri
 from robot.link import rosclient
 from robot.link.wire import LARGE_FRAME_BYTES
+from robot.live.groups import MAP_META_KEY
 from robot.live.state import get_store
-from robot.navigation.mapimage import grid_path
-from robot.navigation.shared import MAP_META_KEY, map_dir
+from robot.navigation.mapimage import grid_path, map_dir
 from tests.helpers import async_wait_until
 
 pytestmark = pytest.mark.django_db(transaction=True)

@@ -5,11 +5,11 @@ import asyncio
 import pytest
 from asgiref.sync import sync_to_async
 
+from robot.live.groups import GOAL_KEY, GOAL_STATUS_KEY, LOCATIONS_KEY, MAP_META_KEY
 from robot.live.state import get_store
 from robot.models import Location
 from robot.navigation.goals import agoal_send
 from robot.navigation.handlers import track_goal_statuses
-from robot.navigation.shared import GOAL_KEY, GOAL_STATUS_KEY, LOCATIONS_KEY, MAP_META_KEY
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 pytestmark = pytest.mark.django_db(transaction=True)

@@ -5,11 +5,11 @@ import json
 import pytest
 
 from robot import interface as ri
+from robot.live.groups import MAP_META_KEY
 from robot.live.state import get_store
 from robot.models import AuditEntry
 from robot.navigation.handlers import map_meta
-from robot.navigation.mapimage import render_map
-from robot.navigation.shared import MAP_META_KEY, map_dir
+from robot.navigation.mapimage import map_dir, render_map
 from robot.sim import world
 
 # Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
