@@ -8,6 +8,7 @@ from django.db import transaction
 from django.db.models import Max, Min
 from django.shortcuts import redirect
 from django.urls import path
+from django.utils.html import format_html
 
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
@@ -38,12 +39,22 @@ def _set_mode(mode: str):
 
 @admin.register(TopicPolicy)
 class TopicPolicyAdmin(admin.ModelAdmin):
-    list_display = ("topic", "msg_type", "mode", "interval_s", "retention_s", "max_message_bytes")
+    # Few, narrow columns: the list (with the filter beside it) fits a 1366 px screen.
+    list_display = ("topic_and_type", "mode", "interval_s", "retention_s")
+    list_display_links = ("topic_and_type",)
     list_editable = ("mode", "interval_s", "retention_s")
+    ordering = ("topic",)
     list_filter = ("mode",)
     search_fields = ("topic", "msg_type")
     actions = [_set_mode(m) for m in Mode.values]
     change_list_template = "history/admin_policy_changelist.html"
+
+    class Media:
+        css = {"all": ("css/admin_policies.css",)}
+
+    @admin.display(description="Topic", ordering="topic")
+    def topic_and_type(self, policy: TopicPolicy) -> str:
+        return format_html('{}<br><small class="policy-type">{}</small>', policy.topic, policy.msg_type)
 
     def get_urls(self):
         custom = [path("discover/", self.admin_site.admin_view(self.discover), name="history_topicpolicy_discover")]
