@@ -14,8 +14,9 @@ def _fresh_throttle_counts():
 @pytest.fixture
 def robot(sim, link_thread):
     """The simulator, connected through the link, with startup finished."""
-    from tests.commands.support import wait_ready
+    from tests.commands.support import wait_ready, wait_server_ready
 
     wait_ready(sim)
+    wait_server_ready()
     return sim
 

@@ -7,6 +7,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from asgiref.sync import async_to_sync
+
 from robot import interface as ri
 from robot.commands.statewatch import StateWatch
 from robot.models import AuditEntry
@@ -62,6 +64,11 @@ def wait_state(sim, predicate, what: str, timeout: float = 10.0) -> dict[str, An
 def wait_ready(sim) -> None:
     """Startup finished: the state machine waits in suspension."""
     wait_state(sim, lambda s: s["smach_state"] == "suspension", "startup to finish")
+
+
+def wait_server_ready() -> None:
+    """The server has heard that startup finished (mode changes plan from what it has heard)."""
+    wait_until(lambda: async_to_sync(StateWatch().start)() == "suspension", what="the server to hear of suspension")
 
 
 def last_audit() -> AuditEntry:
