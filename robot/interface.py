@@ -71,6 +71,9 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("text_to_speech", "/cyborg_audio/text_to_speech", "std_msgs/String", None, True, recent=10),
     _T("tts_feedback", "/cyborg_audio/feedback_text_to_speech", "std_msgs/String", None, True, recent=10),
     _T("playback_feedback", "/cyborg_audio/feedback_playback", "std_msgs/String", None, True),
+    # the robot's microphone: subscribed only while someone listens (robot/link/audio.py)
+    _T("audio", "/audio/audio", "audio_common_msgs/AudioData"),
+    _T("audio_info", "/audio/audio_info", "audio_common_msgs/AudioInfo", None, True, latched=True),
     _T("current_location", "/cyborg_navigation/current_location", "std_msgs/String", None, True),
     # Every container publishes on this topic; keep each one's latest (no coalescing across paths).
     _T("smach_status", "/controller_viewer/smach/container_status", "smach_msgs/SmachContainerStatus", None, True,
@@ -88,6 +91,9 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("playback", "/cyborg_audio/playback", "std_msgs/String"),
     _T("domecontrol", "/cyborg_visual/domecontrol", "std_msgs/String"),
     _T("cmd_vel", "/cmd_vel", "geometry_msgs/Twist"),
+    # operator audio for the robot's speakers; its format is declared latched on speaker_info
+    _T("speaker", "/cyborg_audio/speaker", "audio_common_msgs/AudioData"),
+    _T("speaker_info", "/cyborg_audio/speaker_info", "audio_common_msgs/AudioInfo", latched=True),
     _T("move_base_simple_goal", "/move_base_simple/goal", "geometry_msgs/PoseStamped"),
     _T("initialpose", "/initialpose", "geometry_msgs/PoseWithCovarianceStamped"),
 )
@@ -292,6 +298,20 @@ EMOTION_PRESETS: dict[str, tuple[float, float, float]] = {
     "hungry": (-0.44, 0.14, -0.21),
     "sleepy": (0.20, -0.70, -0.44),
 }
+
+# The speaker's format (ROBOT_INTERFACE.md: raw PCM S16LE, 16 kHz, mono, chunks of 20-100 ms).
+SPEAKER_RATE_HZ = 16000
+SPEAKER_CHANNELS = 1
+SPEAKER_SAMPLE_FORMAT = "S16LE"
+SPEAKER_CODING = "wave"
+SPEAKER_CHUNK_MS = (20, 100)
+
+
+def speaker_info() -> dict[str, object]:
+    """The AudioInfo message declaring what goes out on the speaker topic."""
+    return {"channels": SPEAKER_CHANNELS, "sample_rate": SPEAKER_RATE_HZ, "sample_format": SPEAKER_SAMPLE_FORMAT,
+            "bitrate": SPEAKER_RATE_HZ * 16 * SPEAKER_CHANNELS, "coding_format": SPEAKER_CODING}
+
 
 NAVIGATION_ORDERS = ("navigation_go_to", "navigation_wander", "navigation_dock")
 

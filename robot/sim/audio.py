@@ -1,9 +1,15 @@
-"""The audio node: a text-to-speech queue and sound clip playback, with feedback topics."""
+"""The audio nodes: a text-to-speech queue and sound clip playback with feedback topics, the
+microphone (a tone, with its format latched) and the speakers (recording what operators sent)."""
 
 from __future__ import annotations
 
 import asyncio
+import base64
+import time
 from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
 
 
 class Audio:
@@ -59,3 +65,108 @@ class Audio:
             self.speaking = None
             self.done_count += 1
             self.spoken(text)
+
+
+# --- the microphone and the speakers (raw PCM S16LE, the audio_common formats) ---------------
+
+
+def tone(freq_hz: float, start: int, count: int, rate: int, amplitude: float = 0.3) -> bytes:
+    """``count`` samples of a sine (phase-continuous from sample ``start``) as S16LE bytes."""
+    n = np.arange(start, start + count, dtype=np.float64)
+    return (np.sin(2 * np.pi * freq_hz * n / rate) * amplitude * 32767).astype("<i2").tobytes()
+
+
+def dominant_hz(pcm: bytes, rate: int) -> float:
+    """The strongest frequency in S16LE samples (0.0 for silence or nothing)."""
+    samples = np.frombuffer(pcm[: len(pcm) // 2 * 2], dtype="<i2").astype(np.float64)
+    if len(samples) < 2 or not samples.any():
+        return 0.0
+    spectrum = np.abs(np.fft.rfft(samples * np.hanning(len(samples))))
+    spectrum[0] = 0.0
+    return float(np.fft.rfftfreq(len(samples), 1.0 / rate)[int(np.argmax(spectrum))])
+
+
+class Microphone:
+    """Publishes a tone in ``chunk_s`` chunks, paced by the clock, while anyone subscribes."""
+
+    def __init__(self, publish: Callable[[dict[str, object]], None], wanted: Callable[[], bool], *,
+                 freq_hz: float = 440.0, rate: int = 16000, chunk_s: float = 0.02) -> None:
+        self.publish, self.wanted = publish, wanted
+        self.freq_hz, self.rate, self.chunk = freq_hz, rate, int(rate * chunk_s)
+        self.samples = 0  # published so far (the tone's phase)
+        self.published = 0
+        self._task: asyncio.Task[None] | None = None
+
+    def info(self) -> dict[str, object]:
+        return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": self.rate * 16,
+                "coding_format": "wave"}
+
+    def start(self) -> None:
+        if self.freq_hz > 0:
+            self._task = asyncio.get_running_loop().create_task(self._run())
+
+    def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+
+    async def _run(self) -> None:
+        loop = asyncio.get_running_loop()
+        period = self.chunk / self.rate
+        due = loop.time()
+        while True:
+            due += period
+            await asyncio.sleep(max(0.0, due - loop.time()))
+            if loop.time() - due > 1.0:
+                due = loop.time()  # the loop stalled: start again rather than burst
+            if self.wanted():
+                data = tone(self.freq_hz, self.samples, self.chunk, self.rate)
+                self.samples += self.chunk
+                self.published += 1
+                self.publish({"data": base64.b64encode(data).decode()})
+
+
+@dataclass(frozen=True)
+class Heard:
+    t: float  # arrival, epoch seconds
+    pcm: bytes
+
+
+class Speaker:
+    """What arrived on the speaker topic, kept so tests and benches can measure it."""
+
+    def __init__(self, rate: int = 16000) -> None:
+        self.rate = rate
+        self.chunks: list[Heard] = []
+        self.info: dict[str, object] | None = None
+
+    def on_data(self, msg: dict[str, object]) -> None:
+        self.chunks.append(Heard(time.time(), base64.b64decode(str(msg.get("data", "")))))
+
+    def on_info(self, msg: dict[str, object]) -> None:
+        self.info = dict(msg)
+
+    def reset(self) -> None:
+        self.chunks.clear()
+
+    def pcm(self) -> bytes:
+        return b"".join(c.pcm for c in self.chunks)
+
+    def duration_s(self) -> float:
+        return len(self.pcm()) / 2 / self.rate
+
+    def dominant_hz(self) -> float:
+        return dominant_hz(self.pcm(), self.rate)
+
+    def gap_s(self, buffer_s: float = 0.06) -> float:
+        """Silence a player would leave: it starts ``buffer_s`` after the first chunk, plays every
+        chunk in order and waits (a gap) whenever the next has not arrived when the last ends."""
+        if not self.chunks:
+            return 0.0
+        ends = self.chunks[0].t + buffer_s
+        gaps = 0.0
+        for chunk in self.chunks:
+            if chunk.t > ends:
+                gaps += chunk.t - ends
+                ends = chunk.t
+            ends += len(chunk.pcm) / 2 / self.rate
+        return gaps

@@ -30,6 +30,10 @@ _DEFS: dict[str, str] = {
     "std_msgs/UInt32": "uint32 data",
     "std_msgs/Time": "time data",
     "std_msgs/Empty": "",
+    "audio_common_msgs/AudioData": "uint8[] data",
+    "audio_common_msgs/AudioInfo": (
+        "uint8 channels; uint32 sample_rate; string sample_format; uint32 bitrate; string coding_format"
+    ),
     "geometry_msgs/Vector3": "float64 x; float64 y; float64 z",
     "geometry_msgs/Point": "float64 x; float64 y; float64 z",
     "geometry_msgs/Point32": "float32 x; float32 y; float32 z",

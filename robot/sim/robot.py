@@ -22,7 +22,7 @@ from robot import interface as ri
 
 from . import messages, world
 from .actions import ABORTED, PREEMPTED, SUCCEEDED, ActionServer, Goal
-from .audio import Audio
+from .audio import Audio, Microphone, Speaker
 from .emotions import EmotionSystem
 from .navigation import Navigator
 from .protocol import Broker, ServiceError
@@ -85,6 +85,7 @@ class SimRobot:
         battery_drain_per_s: float = 0.0002,
         battery_charge_per_s: float = 0.002,
         tick_hz: float = 50.0,
+        mic_tone_hz: float = 440.0,
     ) -> None:
         self.host = host
         self.port = port
@@ -127,6 +128,8 @@ class SimRobot:
         self.sm = StateMachine(self._on_state_change)
         self.emotions = EmotionSystem(self.rng, self._on_emotion)
         self.audio = Audio(self._on_spoken, self._on_played, tts_s_per_char, tts_min_s, clip_s)
+        self.mic = Microphone(lambda m: self._publish("audio", m), lambda: self._wants("audio"), freq_hz=mic_tone_hz)
+        self.speaker = Speaker()
         mb, nav = ri.action("move_base"), ri.action("navigation")
         self.move_base = ActionServer(mb.name, mb.type, self._publish_name, self._move_base_goal,
                                       self._move_base_cancel)
@@ -153,6 +156,7 @@ class SimRobot:
             "emotional_controller": self._emotional_controller, "set_emotional_state": self._set_emotion,
             "emotional_feedback": self._emotional_feedback, "text_to_speech": lambda m: self.audio.say(m["data"]),
             "playback": self._playback, "domecontrol": self._domecontrol, "robot_mode": self._robot_mode,
+            "speaker": self.speaker.on_data, "speaker_info": self.speaker.on_info,
         }
         for key, handler in on.items():
             b.on_publish(ri.topic(key).name, handler)
@@ -231,6 +235,8 @@ class SimRobot:
         loop = asyncio.get_running_loop()
         self._mode_queue = asyncio.Queue()
         self.audio.start()
+        self.mic.start()
+        self._publish("audio_info", self.mic.info())
         self._tasks += [loop.create_task(self._tick_loop()), loop.create_task(self._commander_loop())]
         self._started = True
         self._publish_client_count()
@@ -246,6 +252,7 @@ class SimRobot:
         for t in self._tasks:
             t.cancel()
         self.audio.stop()
+        self.mic.stop()
         if self.video is not None:
             await self.video.stop()
         if self.server is not None:

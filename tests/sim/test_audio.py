@@ -1,0 +1,52 @@
+"""The simulated microphone and speakers, driven by unmodified roslibpy."""
+
+from __future__ import annotations
+
+import base64
+import time
+
+import roslibpy
+
+from robot import interface as ri
+from robot.sim.audio import dominant_hz, tone
+from tests.helpers import wait_until
+from tests.sim.support import Inbox
+
+
+def _topic(ros, key: str) -> roslibpy.Topic:
+    t = ri.topic(key)
+    return roslibpy.Topic(ros, t.name, t.type)
+
+
+def test_the_microphone_publishes_its_tone_and_latched_format_only_while_someone_listens(sim, ros):
+    info, mic = Inbox(), Inbox()
+    _topic(ros, "audio_info").subscribe(info)
+    info.wait(what="audio_info")
+    assert info.items[0]["sample_rate"] == 16000 and info.items[0]["coding_format"] == "wave"
+    assert sim.robot.mic.published == 0
+    topic = _topic(ros, "audio")
+    topic.subscribe(mic)
+    mic.wait(lambda items: len(items) >= 25, what="half a second of microphone")
+    pcm = b"".join(base64.b64decode(m["data"]) for m in mic.items)
+    assert len(base64.b64decode(mic.items[0]["data"])) == 640  # 20 ms of 16 kHz S16LE
+    assert abs(dominant_hz(pcm, 16000) - 440) < 5
+    topic.unsubscribe()
+    wait_until(lambda: sim.subscription_count(ri.topic("audio").name) == 0)
+    published = sim.robot.mic.published
+    time.sleep(0.1)
+    assert sim.robot.mic.published == published
+
+
+def test_the_speakers_keep_what_arrives_for_measuring(sim, ros):
+    _topic(ros, "speaker_info").publish(roslibpy.Message(ri.speaker_info()))
+    speaker = _topic(ros, "speaker")
+    for i in range(25):
+        data = tone(1000, i * 320, 320, 16000)
+        speaker.publish(roslibpy.Message({"data": base64.b64encode(data).decode()}))
+        time.sleep(0.02)
+    wait_until(lambda: len(sim.robot.speaker.chunks) == 25)
+    heard = sim.robot.speaker
+    assert heard.info == ri.speaker_info()
+    assert abs(heard.duration_s() - 0.5) < 1e-9
+    assert abs(heard.dominant_hz() - 1000) < 5
+    assert heard.gap_s(buffer_s=0.1) < 0.1
