@@ -9,7 +9,7 @@ from django.contrib.auth.models import Group, Permission, User
 from cyborg_site.roles import Role
 
 # Admins manage users and the robot's configuration in the Django admin.
-_ADMIN_APPS = ("auth", "robot", "history", "authtoken")
+_ADMIN_APPS = ("auth", "robot", "history", "authtoken", "axes")
 
 
 def ensure_role_groups() -> dict[Role, Group]:

@@ -7,6 +7,10 @@ class DashboardConfig(AppConfig):
     default_auto_field = "django.db.models.BigAutoField"
 
     def ready(self) -> None:
+        from axes.signals import user_locked_out
+
         from dashboard.accounts import ensure_role_groups
+        from dashboard.lockouts import audit_lockout
 
         post_migrate.connect(lambda **kwargs: ensure_role_groups(), sender=self, weak=False)
+        user_locked_out.connect(audit_lockout, dispatch_uid="dashboard.audit_lockout")

@@ -1,12 +1,26 @@
-"""Token login for scripts: POST {username, password} -> {token}."""
+"""Token login for scripts: POST {username, password} -> {token}, throttled like the login form."""
 
 from __future__ import annotations
 
+from django.conf import settings
 from drf_spectacular.utils import extend_schema, inline_serializer
-from rest_framework import serializers
+from rest_framework import exceptions, serializers
 from rest_framework.authtoken.views import ObtainAuthToken
 
 from robot.api.common import error_responses
+
+
+def lockout_message() -> str:
+    minutes = settings.AXES_COOLOFF_TIME.total_seconds() / 60
+    return (f"Too many failed logins from this account or address: try again in {minutes:g} minutes, "
+            "or ask an admin to clear the lockout.")
+
+
+class LockedOut(exceptions.Throttled):
+    default_code = "locked_out"
+
+    def __init__(self) -> None:
+        super().__init__(wait=settings.AXES_COOLOFF_TIME.total_seconds(), detail=lockout_message())
 
 
 class TokenView(ObtainAuthToken):
@@ -15,11 +29,20 @@ class TokenView(ObtainAuthToken):
 
     @extend_schema(
         summary="Get an API token",
-        description="Exchange a username and password for a token; send it as `Authorization: Token <token>`.",
+        description="Exchange a username and password for a token; send it as `Authorization: Token <token>`. "
+                    "After `LOGIN_FAILURE_LIMIT` failures for one account or from one address, both are refused "
+                    "(429, code `locked_out`) for `LOGIN_LOCKOUT_MINUTES`, even with the right password.",
         request=inline_serializer("TokenIn", {"username": serializers.CharField(),
                                               "password": serializers.CharField()}),
-        responses={200: inline_serializer("TokenOut", {"token": serializers.CharField()}), **error_responses(400)},
+        responses={200: inline_serializer("TokenOut", {"token": serializers.CharField()}),
+                   **error_responses(400, 429)},
         tags=["auth"],
     )
     def post(self, request, *args, **kwargs):
-        return super().post(request, *args, **kwargs)
+        try:
+            return super().post(request, *args, **kwargs)
+        except exceptions.ValidationError:
+            # django-axes flags the request when the account or address is locked out.
+            if getattr(request, "axes_locked_out", False):
+                raise LockedOut() from None
+            raise

@@ -8,12 +8,11 @@ from history.models import Mode, TopicPolicy
 from history.selectors import numeric_fields, state_timeline
 from history.storage import utc, write_rows
 from robot import interface as ri
-from tests.conftest import PASSWORD
 
 
 def _client(user) -> Client:
     client = Client()
-    assert client.login(username=user.username, password=PASSWORD)
+    client.force_login(user)
     return client
 
 

@@ -8,7 +8,6 @@ from history.models import Mode, Rollup, Sample, SeriesBucket
 from history.policies import policy_upsert
 from history.retention import prune_expired
 from history.storage import utc, write_rows
-from tests.conftest import PASSWORD
 
 
 def _write(topic: str, values: list[tuple[float, float]]) -> None:
@@ -69,7 +68,7 @@ def test_it_rebuilds_the_rollups_when_an_admin_deletes_samples(db, admin_user):
     write_rows([("/admin", "std_msgs/Float32", t0 + 30.5, '{"data": 1000.0}')])
     doomed = list(Sample.objects.filter(data__data__gte=500).values_list("pk", flat=True))
     client = Client()
-    assert client.login(username=admin_user.username, password=PASSWORD)
+    client.force_login(admin_user)
 
     res = client.post("/admin/history/sample/", {"action": "delete_selected", "_selected_action": doomed,
                                                  "post": "yes"})

@@ -1,0 +1,100 @@
+"""Guessing passwords: after LOGIN_FAILURE_LIMIT failures for one account or from one address,
+the login form and the token endpoint refuse both (even the right password), the lockout is
+audited, shown in the admin and cleared there."""
+
+from __future__ import annotations
+
+import pytest
+from axes.models import AccessAttempt
+from django.test import Client
+from rest_framework.test import APIClient
+
+from robot.models import AuditEntry
+from tests.conftest import PASSWORD
+
+pytestmark = pytest.mark.django_db
+
+LIMIT = 3
+
+
+@pytest.fixture(autouse=True)
+def _small_limit(settings):
+    settings.AXES_FAILURE_LIMIT = LIMIT
+
+
+def form_login(username: str, password: str, address: str = "10.0.0.1"):
+    return Client(REMOTE_ADDR=address).post("/accounts/login/", {"username": username, "password": password})
+
+
+def token_login(username: str, password: str, address: str = "10.0.0.1"):
+    return APIClient(REMOTE_ADDR=address).post("/api/auth/token/", {"username": username, "password": password},
+                                               format="json")
+
+
+def test_the_login_form_locks_an_account_out_and_audits_it(operator):
+    for _ in range(LIMIT - 1):
+        assert form_login("otto", "wrong").status_code == 200
+    locked = form_login("otto", "wrong")
+    assert locked.status_code == 429
+    assert "Too many failed logins" in locked.content.decode()
+    # The right password from another address does not get in either.
+    assert form_login("otto", PASSWORD, address="10.0.0.2").status_code == 429
+    entry = AuditEntry.objects.filter(action="login.lockout").first()
+    assert entry is not None and (entry.ok, entry.error_code, entry.source) == (False, "locked_out", "page")
+    assert entry.params["username"] == "otto"
+
+
+def test_the_token_endpoint_locks_out_with_a_json_429(operator):
+    for _ in range(LIMIT - 1):
+        res = token_login("otto", "wrong")
+        assert res.status_code == 400 and res.json()["code"] == "invalid"
+    locked = token_login("otto", "wrong")
+    assert locked.status_code == 429, locked.content
+    assert locked.json()["code"] == "locked_out" and "Retry-After" in locked
+    refused = token_login("otto", PASSWORD, address="10.9.9.9")
+    assert refused.status_code == 429 and refused.json()["code"] == "locked_out"
+    assert AuditEntry.objects.filter(action="login.lockout", source="api").exists()
+
+
+def test_one_address_guessing_many_accounts_is_locked_out(operator, viewer):
+    for name in ("a", "b", "c")[:LIMIT]:
+        form_login(name, "wrong", address="10.6.6.6")
+    assert form_login("vera", PASSWORD, address="10.6.6.6").status_code == 429
+    assert token_login("vera", PASSWORD, address="10.6.6.6").status_code == 429
+    # Another address is not affected, and the guessed account names were not real ones.
+    assert form_login("vera", PASSWORD, address="10.7.7.7").status_code == 302
+
+
+def test_a_success_resets_the_account_count(operator):
+    for _ in range(LIMIT - 1):
+        form_login("otto", "wrong")
+    assert form_login("otto", PASSWORD).status_code == 302
+    for _ in range(LIMIT - 1):
+        form_login("otto", "wrong", address="10.0.0.3")
+    assert form_login("otto", PASSWORD, address="10.0.0.4").status_code == 302
+
+
+def test_admins_see_and_clear_lockouts_in_the_admin(operator, admin_user):
+    for _ in range(LIMIT):
+        form_login("otto", "wrong")
+    assert form_login("otto", PASSWORD, address="10.0.0.5").status_code == 429
+    admin = Client()
+    admin.force_login(admin_user)
+    listing = admin.get("/admin/axes/accessattempt/")
+    assert listing.status_code == 200 and "otto" in listing.content.decode()
+    ids = [str(pk) for pk in AccessAttempt.objects.values_list("pk", flat=True)]
+    cleared = admin.post("/admin/axes/accessattempt/", {"action": "delete_selected", "_selected_action": ids,
+                                                         "post": "yes"})
+    assert cleared.status_code == 302
+    assert not AccessAttempt.objects.exists()
+    assert form_login("otto", PASSWORD, address="10.0.0.5").status_code == 302
+
+
+def test_behind_a_proxy_the_forwarded_address_counts(operator, settings):
+    settings.CLIENT_IP_FROM_X_FORWARDED_FOR = True
+    proxy = "127.0.0.1"
+    for _ in range(LIMIT):
+        Client(REMOTE_ADDR=proxy, HTTP_X_FORWARDED_FOR="1.2.3.4, 10.1.1.1").post(
+            "/accounts/login/", {"username": "nobody", "password": "x"})
+    other = Client(REMOTE_ADDR=proxy, HTTP_X_FORWARDED_FOR="10.2.2.2")
+    assert other.post("/accounts/login/", {"username": "otto", "password": PASSWORD}).status_code == 302
