@@ -274,7 +274,7 @@ REST_FRAMEWORK = {
         "robot.api.errors.SafeJSONRenderer",
         "rest_framework.renderers.BrowsableAPIRenderer",
     ],
-    "DEFAULT_SCHEMA_CLASS": "drf_spectacular.openapi.AutoSchema",
+    "DEFAULT_SCHEMA_CLASS": "robot.api.schema.DocumentedErrorsSchema",
     "DEFAULT_THROTTLE_RATES": {"commands": COMMAND_THROTTLE_RATE},
     "EXCEPTION_HANDLER": "robot.api.errors.api_exception_handler",
 }

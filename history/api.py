@@ -103,7 +103,8 @@ class _IgnoreFormatParameter(BaseContentNegotiation):
 class ExportView(APIView):
     content_negotiation_class = _IgnoreFormatParameter
 
-    @extend_schema(parameters=[s.ExportIn], responses={(200, "application/octet-stream"): bytes},
+    @extend_schema(parameters=[s.ExportIn],
+                   responses={(200, content_type): bytes for content_type, _ in FORMATS.values()},
                    summary="Stream a topic's samples as CSV, JSON Lines or MCAP (JSON encoding, opens in Foxglove)")
     def get(self, request: Request) -> StreamingHttpResponse:
         q = s.ExportIn(data=request.query_params)

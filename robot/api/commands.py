@@ -51,7 +51,7 @@ def _command_view(name: str, *, action: str, field: str, command: Callable[..., 
     return extend_schema(
         summary=summary, description=description, tags=["commands"],
         request=inline_serializer(f"{name.removesuffix('View')}In", {field: input_field}),
-        responses={200: CommandOut, **error_responses(400, 401, 403, 429, 503, 504, *errors)},
+        responses={200: CommandOut, **error_responses(400, 401, 403, 409, 429, 503, 504, *errors)},
     )(view)
 
 
@@ -59,7 +59,7 @@ ModeView = _command_view(
     "ModeView", action="mode", field="mode", command=modes.achange_mode, summary="Change mode",
     description="Behaviour, Demo, Manual or Stop. With `MODE_COMMANDER=server` the server runs the commander's "
                 "sequence itself; with `robot` it publishes the mode on `robot_mode`. One change at a time (409).",
-    input_field=serializers.ChoiceField(choices=MODE_NAMES), errors=(409,))
+    input_field=serializers.ChoiceField(choices=MODE_NAMES))
 EventView = _command_view(
     "EventView", action="event", field="event", command=tool.asend_event, summary="Send event",
     description="Register a state machine event (see `available_events` in the robot state).",

@@ -39,7 +39,9 @@ def error_responses(*codes: int) -> dict[int, OpenApiResponse]:
         400: "Invalid input; `field` names the field. Nothing was sent.",
         401: "Not authenticated.",
         403: "Your role may not command the robot (viewers). Nothing was sent.",
-        409: "Another mode change is in progress.",
+        404: "Not found (code `no_map`: no map from the robot yet).",
+        409: "Refused for now: the E-STOP is engaged (code `estop`; an operator must release it) or another "
+             "mode change is in progress (code `busy`). Nothing was sent.",
         429: "Too many commands; slow down.",
         502: "The robot refused (e.g. a failed service call).",
         503: "Robot offline. Nothing was sent or queued.",

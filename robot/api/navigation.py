@@ -11,6 +11,7 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 
 from cyborg_site.roles import is_operator
+from robot.api.common import error_responses
 from robot.api.serializers_navigation import (
     Goal,
     InitialPoseResult,
@@ -31,7 +32,8 @@ def _source(request: Request) -> str:
     return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
 
 
-@extend_schema(responses={200: MapMeta}, summary="The latest map's metadata and versioned image URL")
+@extend_schema(responses={200: MapMeta, **error_responses(404)},
+               summary="The latest map's metadata and versioned image URL")
 @api_view(["GET"])
 def map_view(request: Request) -> Response:
     meta = map_meta()
@@ -41,13 +43,17 @@ def map_view(request: Request) -> Response:
     return Response(meta)
 
 
-@extend_schema(request=PoseInput, responses={200: Goal}, summary="Send a navigation goal (move_base)")
+@extend_schema(request=PoseInput, responses={200: Goal, **error_responses(409, 503, 504)},
+               summary="Send a navigation goal (move_base)",
+               description="x and y in metres on the latest map (refused off the map, on obstacles or in "
+                           "unexplored space), yaw in radians within (-2π, 2π]; other fields are refused.")
 @api_view(["POST"])
 def goal_view(request: Request) -> Response:
     return Response(async_to_sync(agoal_send)(user=request.user, source=_source(request), data=body_object(request)))
 
 
-@extend_schema(request=None, responses={200: NavigationStatus}, summary="Cancel the current goal")
+@extend_schema(request=None, responses={200: NavigationStatus, **error_responses(503, 504)},
+               summary="Cancel the current goal")
 @api_view(["POST"])
 def cancel_view(request: Request) -> Response:
     return Response(async_to_sync(agoal_cancel)(user=request.user, source=_source(request)))
@@ -59,7 +65,10 @@ def status_view(request: Request) -> Response:
     return Response(navigation_status())
 
 
-@extend_schema(request=PoseInput, responses={200: InitialPoseResult}, summary="Set the robot's initial pose")
+@extend_schema(request=PoseInput, responses={200: InitialPoseResult, **error_responses(409, 503, 504)},
+               summary="Set the robot's initial pose",
+               description="x and y in metres on the latest map (unexplored space allowed, obstacles not), yaw in "
+                           "radians within (-2π, 2π]; other fields are refused.")
 @api_view(["POST"])
 def initial_pose_view(request: Request) -> Response:
     body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=body_object(request))
@@ -82,7 +91,8 @@ class LocationViewSet(viewsets.ModelViewSet):
     lookup_value_regex = r"[A-Za-z0-9_\-]+"
     permission_classes = [permissions.IsAuthenticated, OperatorWrites]
 
-    @extend_schema(request=None, responses={200: Goal}, summary="Send the robot to this location")
+    @extend_schema(request=None, responses={200: Goal, **error_responses(409, 503, 504)},
+                   summary="Send the robot to this location")
     @action(detail=True, methods=["post"], permission_classes=[permissions.IsAuthenticated])
     def go(self, request: Request, name: str) -> Response:
         # The command pipeline checks the role (and audits refusals), so no permission class here.
