@@ -5,6 +5,7 @@ describe, and writes a viewer got through. Used by the suite (short run) and ben
 from __future__ import annotations
 
 import json
+import time
 import urllib.request
 from dataclasses import dataclass, field
 
@@ -33,6 +34,7 @@ class FuzzReport:
     schema_violations: int = 0
     viewer_writes: int = 0
     problems: list[str] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)  # per operation
 
     def lines(self) -> list[str]:
         return [f"fuzz_requests: {self.requests}", f"fuzz_server_errors: {self.server_errors}",
@@ -64,7 +66,10 @@ def _fuzz_operation(operation, mode, base_url, headers, viewer, report, max_exam
     @hypothesis_settings(max_examples=max_examples, deadline=None, database=None, phases=[Phase.generate],
                          suppress_health_check=list(HealthCheck), derandomize=True)
     def run(case) -> None:
+        started = time.monotonic()
         response = case.call(base_url=base_url, headers=headers, timeout=30)
+        name = f"{case.method} {operation.path}"
+        report.seconds[name] = report.seconds.get(name, 0.0) + time.monotonic() - started
         report.requests += 1
         where = f"{case.method} {case.formatted_path} -> {response.status_code}"
         if response.status_code >= 500:
@@ -78,7 +83,7 @@ def _fuzz_operation(operation, mode, base_url, headers, viewer, report, max_exam
             case.validate_response(response, checks=SCHEMA_CHECKS)
         except (Failure, FailureGroup) as exc:
             report.schema_violations += 1
-            report.problems.append(f"schema: {where}: {str(exc)[:400]}")
+            report.problems.append(f"schema: {where}: {str(exc)[:3000]}")
 
     try:
         run()
