@@ -14,14 +14,14 @@ HOME_KEYS = (
     "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
     "state_change", "state_transitions", "emotional_state", "emotion_system_status",
     "text_to_speech", "tts_feedback", "current_location", "rosout", "robot_pose",
-    "smach_status",
+    "smach_status", MODE_REQUEST_KEY,
 )
 # The map page: the robot's position and plan, besides the server's own navigation keys.
 MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location", *NAVIGATION_KEYS)
 # The drive page.
 DRIVE_KEYS = ("odom", "robot_pose", "motors_state")
 # What the state API reports.
-STATE_KEYS = (*HOME_KEYS, MODE_REQUEST_KEY)
+STATE_KEYS = HOME_KEYS
 
 # Whole occupancy grids are far too big for a browser socket; the map page gets an image.
 _BULKY_TYPES = {"nav_msgs/OccupancyGrid"}

@@ -23,7 +23,13 @@ const renderers = {
     set("battery.charging", m.data < -1 ? `error (${m.data})` : name);
   },
   motors_state(m) { set("motors.state", m.data ? "enabled" : "disabled"); },
-  robot_mode(m) { set("mode.requested", m.data); },
+  // The mode the server was asked for and how far it got; the robot's own echo only when
+  // no request went through this server (with the server strategy the echo stays empty).
+  mode_request(m) {
+    const status = { running: "applying…", reached: "reached", failed: "failed" }[m.status] ?? m.status;
+    set("mode.requested", `${m.mode} · ${status}`);
+  },
+  robot_mode(m) { if (!latest.mode_request) set("mode.requested", m.data || "—"); },
   current_location(m) { set("location.current", m.data || "(none)"); },
   smach_status(m) {
     smachActive[m.path] = m.active_states || [];
