@@ -15,6 +15,7 @@ from collections.abc import Awaitable, Callable
 from django.conf import settings
 
 from robot.link.bus import RobotError, apublish
+from robot.supervisor import supervise
 from robot.teleop.lock import DriveLock, Holder
 from robot.teleop.twist import STOP, Command, twist
 
@@ -83,7 +84,7 @@ class TeleopSession:
                 await self._publish(command)
             self.active = True
         if self._task is None or self._task.done():
-            self._task = asyncio.ensure_future(self._run())
+            self._task = supervise(f"teleop.{self.me.owner}", self._run, transient=True)
         return command
 
     async def halt(self) -> bool:

@@ -1,0 +1,54 @@
+"""The supervisor: a failing task is logged with its traceback and restarted with a growing
+backoff, its state feeds health, cancellation stops it, a transient task leaves health."""
+
+import asyncio
+import logging
+
+from robot import supervisor
+
+
+async def test_it_logs_and_restarts_a_failing_task_and_reports_it(caplog):
+    runs = []
+    recovered = asyncio.Event()
+
+    async def flaky() -> None:
+        runs.append(asyncio.get_running_loop().time())
+        if len(runs) <= 3:
+            raise ConnectionError(f"redis gone {len(runs)}")
+        recovered.set()
+        await asyncio.sleep(3600)
+
+    with caplog.at_level(logging.ERROR, logger="robot.supervisor"):
+        task = supervisor.supervise("test.flaky", flaky)
+        await asyncio.wait_for(recovered.wait(), 5)
+    state = supervisor.health()["test.flaky"]
+    assert state["state"] == "running" and state["restarts"] == 3
+    assert state["last_error"] == "ConnectionError: redis gone 3"
+    gaps = [b - a for a, b in zip(runs, runs[1:], strict=False)]
+    assert gaps[0] >= supervisor.INITIAL_BACKOFF_S * 0.9 and gaps[1] > gaps[0] * 1.5  # backoff grows
+    failures = [r for r in caplog.records if "test.flaky failed" in r.getMessage()]
+    assert len(failures) == 3 and all(r.exc_info for r in failures)  # with the traceback
+    task.cancel()
+    await asyncio.gather(task, return_exceptions=True)
+    assert supervisor.health()["test.flaky"]["state"] == "finished"
+    supervisor.forget("test.flaky")
+
+
+async def test_it_reports_a_task_waiting_to_restart():
+    async def broken() -> None:
+        raise RuntimeError("always")
+
+    task = supervisor.supervise("test.broken", broken, max_backoff_s=5)
+    await asyncio.sleep(0.05)
+    assert "test.broken" in supervisor.failing()
+    task.cancel()
+    await asyncio.gather(task, return_exceptions=True)
+    supervisor.forget("test.broken")
+
+
+async def test_a_transient_task_leaves_health_when_it_ends():
+    async def once() -> None:
+        await asyncio.sleep(0)
+
+    await supervisor.supervise("test.once", once, transient=True)
+    assert "test.once" not in supervisor.health()
