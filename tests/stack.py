@@ -1,4 +1,5 @@
-"""The whole product as real processes: simulator + Daphne (+ optional Celery worker).
+"""The whole product as real processes: simulator + Daphne (+ optional Celery worker), or
+scaled on a given Redis: simulator + Daphne + a ``robotlink`` process.
 
 Used by browser tests and benchmarks. Each stack gets its own SQLite file (or the
 given DATABASE_URL), free ports, and users per role.
@@ -44,7 +45,7 @@ def wait_for_port(port: int, timeout: float = 20.0, proc: subprocess.Popen | Non
 
 class Stack:
     def __init__(self, *, sim: bool = True, sim_args: tuple[str, ...] = (), env: dict[str, str] | None = None,
-                 users: bool = True) -> None:
+                 users: bool = True, redis_url: str | None = None) -> None:
         self.tmp = Path(tempfile.mkdtemp(prefix="cyborg-stack-"))
         self.web_port = free_port()
         self.sim_port = free_port()
@@ -62,8 +63,10 @@ class Stack:
             "ROBOT_LINK_MAX_BACKOFF_S": "1",
             "DJANGO_SETTINGS_MODULE": "cyborg_site.settings",
             "PYTHONUNBUFFERED": "1",
+            **({"REDIS_URL": redis_url} if redis_url else {}),
             **(env or {}),
         }
+        self.scaled = bool(redis_url)
 
     @property
     def url(self) -> str:
@@ -98,10 +101,20 @@ class Stack:
                 self.manage("adduser", name, "--role", role, "--password", PASSWORD)
         if self.with_sim:
             self.start_sim()
+        if self.scaled:
+            self.start_link()
+        self.start_web()
+        return self
+
+    def start_link(self) -> subprocess.Popen:
+        self.link_proc = self._spawn([PYTHON, "manage.py", "robotlink"], "link")
+        return self.link_proc
+
+    def start_web(self) -> subprocess.Popen:
         self.web = self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(self.web_port),
                                 "cyborg_site.asgi:application"], "web")
         wait_for_port(self.web_port, proc=self.web)
-        return self
+        return self.web
 
     def wait_robot_online(self, timeout: float = 20.0) -> None:
         """Poll the server until its link reports the robot connected."""

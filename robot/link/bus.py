@@ -8,8 +8,10 @@ deadline: if the link gets it too late it is dropped, never fired later.
 from __future__ import annotations
 
 import asyncio
+import json
 import time
 import uuid
+import weakref
 from typing import Any
 
 from asgiref.sync import async_to_sync
@@ -19,8 +21,9 @@ from django.conf import settings
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.connection import RobotLink
-from robot.live.groups import LINK_CHANNEL, STATUS_KEY, LinkReply, LinkRequest
-from robot.live.state import get_store, status_view
+from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, STATUS_KEY, LinkReply, LinkRequest
+from robot.live.state import get_store, redis_key, status_view
+from robot.supervisor import supervise
 
 
 class RobotError(Exception):
@@ -90,11 +93,63 @@ async def _direct(hosted: RobotLink, request: LinkRequest) -> LinkReply:
     return await asyncio.wrap_future(future)
 
 
+class _Replies:
+    """Where the link's replies come back to this process: one key (a Redis list when scaled,
+    a channel of the in-memory layer otherwise), read by one supervised task that hands each
+    reply to its waiting request. A receive per request on the Redis channel layer lost
+    replies while the process's consumers received too (teleop stalled after 0.1 s)."""
+
+    def __init__(self, layer: Any) -> None:
+        self.layer = layer
+        self.address = ""
+        self.waiting: dict[str, asyncio.Future] = {}
+        self._task: asyncio.Task | None = None
+        self._redis: Any = None
+
+    async def reply_to(self) -> str:
+        if not self.address:
+            if settings.REDIS_URL:
+                import redis.asyncio
+
+                self._redis = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+                self.address = REPLY_LIST_PREFIX + redis_key(f"link-replies:{uuid.uuid4().hex}")
+            else:
+                self.address = await self.layer.new_channel("robot-reply.")
+        if self._task is None or self._task.done():
+            self._task = supervise(f"bus.replies.{self.address[-8:]}", self._receive)
+        return self.address
+
+    async def _receive(self) -> None:
+        key = self.address.removeprefix(REPLY_LIST_PREFIX)
+        while True:
+            if self._redis is not None:
+                popped = await self._redis.blpop([key], timeout=1)
+                if popped is None:
+                    continue
+                reply = json.loads(popped[1])
+            else:
+                reply = await self.layer.receive(self.address)
+            future = self.waiting.pop(reply.get("request_id", ""), None)
+            if future is not None and not future.done():
+                future.set_result(reply)
+
+
+_replies: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, _Replies] = weakref.WeakKeyDictionary()
+
+
 async def _via_layer(request: LinkRequest) -> LinkReply:
     layer = get_channel_layer()
-    request["reply_to"] = await layer.new_channel("robot-reply.")
-    await layer.send(LINK_CHANNEL, request)
-    return await layer.receive(request["reply_to"])
+    loop = asyncio.get_running_loop()
+    replies = _replies.get(loop)
+    if replies is None or replies.layer is not layer:
+        replies = _replies[loop] = _Replies(layer)
+    request["reply_to"] = await replies.reply_to()
+    future = replies.waiting[request["request_id"]] = loop.create_future()
+    try:
+        await layer.send(LINK_CHANNEL, request)
+        return await future
+    finally:
+        replies.waiting.pop(request["request_id"], None)
 
 
 async def apublish(key: str, msg: dict[str, Any]) -> None:

@@ -9,8 +9,10 @@ and nothing in a callback blocks.
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import time
+import weakref
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
@@ -24,6 +26,7 @@ from robot.live.fanout import Coalescer
 from robot.live.groups import (
     LATCH_KEY,
     LINK_CHANNEL,
+    REPLY_LIST_PREFIX,
     STATUS_GROUP,
     STATUS_KEY,
     LinkReply,
@@ -299,8 +302,11 @@ class RobotLink:
             return
         reply = await self.execute(request)
         reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
-        if request.get("reply_to"):
-            await self.layer.send(request["reply_to"], reply)
+        reply_to = request.get("reply_to") or ""
+        if reply_to.startswith(REPLY_LIST_PREFIX):
+            await _push_reply(reply_to.removeprefix(REPLY_LIST_PREFIX), reply)
+        elif reply_to:
+            await self.layer.send(reply_to, reply)
 
     async def execute(self, request: LinkRequest) -> LinkReply:
         op = request.get("op")
@@ -377,6 +383,21 @@ async def _cancel_within(tasks: list, timeout: float) -> None:
         _, pending = await asyncio.wait(tasks, timeout=timeout)
         if pending:
             log.warning("%d robot link task(s) did not stop within %g s", len(pending), timeout)
+
+
+_reply_clients: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, Any] = weakref.WeakKeyDictionary()
+
+
+async def _push_reply(key: str, reply: LinkReply) -> None:
+    import redis.asyncio
+    from django.conf import settings
+
+    loop = asyncio.get_running_loop()
+    client = _reply_clients.get(loop)
+    if client is None:
+        client = _reply_clients[loop] = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    async with client.pipeline(transaction=False) as pipe:
+        await pipe.rpush(key, json.dumps(reply, default=str)).expire(key, 60).execute()
 
 
 def _close_quietly(ros: roslibpy.Ros) -> None:

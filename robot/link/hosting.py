@@ -65,9 +65,8 @@ async def _run_forever(name: str, service: BackgroundService, link: RobotLink) -
 
 
 def autostart_in_daphne() -> None:
-    """In the embedded default, start the link once Daphne's reactor runs."""
-    if not settings.EMBEDDED or not settings.ROBOT_LINK_EMBEDDED:
-        return
+    """In the Daphne server: stop the robot before exiting (SIGTERM) and, in the embedded
+    default, start the link once the reactor runs."""
     # Importing Daphne installs its reactor everywhere (tests too); only its server entry
     # points mean this process is the web server.
     if not any(name in sys.modules for name in ("daphne.cli", "daphne.management.commands.runserver")):
@@ -75,5 +74,26 @@ def autostart_in_daphne() -> None:
     from twisted.internet import reactor
     from twisted.internet.asyncioreactor import AsyncioSelectorReactor
 
-    if isinstance(reactor, AsyncioSelectorReactor):
+    if not isinstance(reactor, AsyncioSelectorReactor):
+        return
+    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)
+    if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
         reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
+
+
+def _stop_robot_before_exit() -> object:
+    from twisted.internet.defer import Deferred
+
+    from robot.teleop.session import halt_all
+
+    async def stop() -> None:
+        try:
+            stopped = await asyncio.wait_for(halt_all(), 2)
+            if stopped:
+                log.warning("shutting down: sent zero for %d driver(s)", stopped)
+        except Exception:
+            log.exception("shutting down: could not stop every driver")
+        if link_module.current is not None:
+            await link_module.current.stop()  # the link's own zero if the robot may be moving
+
+    return Deferred.fromFuture(asyncio.ensure_future(stop()))

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+import weakref
 from collections.abc import Awaitable, Callable
 
 from django.conf import settings
@@ -34,6 +35,15 @@ class NotHolding(RobotError):
 
 async def publish_cmd_vel(command: Command) -> None:
     await apublish("cmd_vel", twist(command))
+
+
+_sessions: weakref.WeakSet[TeleopSession] = weakref.WeakSet()
+
+
+async def halt_all() -> int:
+    """The process is shutting down: every session that moved the robot sends zero now."""
+    results = await asyncio.gather(*(s.halt() for s in list(_sessions)), return_exceptions=True)
+    return sum(1 for r in results if r is True)
 
 
 async def _ignore(kind: str, detail: object) -> None:
@@ -68,6 +78,7 @@ class TeleopSession:
 
     async def drive(self, command: Command) -> Command:
         """New input from the browser; raises NotHolding if this connection lost the lock."""
+        _sessions.add(self)
         async with self._send:
             if not await self.lock.refresh(self.me):
                 raise NotHolding("You do not hold the drive lock.")

@@ -1,0 +1,261 @@
+"""E-STOP through the real product, measured at the simulated robot.
+
+Embedded stack (simulator + Daphne): an operator drives (W held: input every 50 ms on
+``/ws/teleop/``) while another presses E-STOP over the API; from the press to the first zero
+Twist and to the motors going off (the simulator's own /rosout stamp), and every non-zero
+Twist the robot still receives in the 5 s after the stop's zero while the driver keeps
+sending input. Then 20 open pages in headless Chromium: from the press to the banner being
+shown on each page. Scaled stack (private redis-server, simulator, Daphne, robotlink): the
+web process is SIGKILLed while its driver holds W; from the kill to the zero Twist the link
+publishes by itself. Prints ``name: value`` lines; the machine may be shared.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
+
+from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
+from tests.stack import Stack, free_port, wait_for_port  # noqa: E402
+
+TRIALS = 10
+MOTION_WINDOW_S = 5.0
+PAGES = 20
+BANNER_TRIALS = 5
+KILLS = 3
+FORWARD = {"type": "input", "linear": 1.0, "angular": 0.0}
+PAGE_PATHS = ["/", "/map/", "/drive/", "/history/", "/activity/"]
+CHROMIUM = os.environ.get("CHROMIUM_PATH") or "/usr/bin/chromium"
+
+
+def p99(values: list[float]) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, round(0.99 * (len(ordered) - 1)))]
+
+
+class Api:
+    def __init__(self, stack: Stack, cookie: str) -> None:
+        self.stack, self.cookie = stack, cookie
+        self.csrf = dict(part.split("=", 1) for part in cookie.split("; "))["csrftoken"]
+
+    def post(self, path: str, body: dict | None = None) -> tuple[int, dict]:
+        request = urllib.request.Request(
+            f"{self.stack.url}{path}", data=json.dumps(body or {}).encode(), method="POST",
+            headers={"Cookie": self.cookie, "X-CSRFToken": self.csrf, "Content-Type": "application/json"})
+        try:
+            with urllib.request.urlopen(request, timeout=15) as res:
+                return res.status, json.loads(res.read() or b"{}")
+        except urllib.error.HTTPError as err:
+            return err.code, json.loads(err.read() or b"{}")
+
+    def release_and_enable(self) -> None:
+        status, body = self.post("/api/robot/estop/release/", {"confirm": True})
+        assert status == 200, body
+        status, body = self.post("/api/robot/motors/", {"enabled": True})
+        assert status == 200, body
+
+
+class Driver:
+    """A driver's page that keeps W held: input every 50 ms, like drive.js."""
+
+    def __init__(self, stack: Stack, cookie: str) -> None:
+        self.stack, self.cookie = stack, cookie
+        self.ws: ClientConnection | None = None
+        self._task: asyncio.Task | None = None
+
+    async def start(self) -> None:
+        self.ws = await connect(f"ws://127.0.0.1:{self.stack.web_port}/ws/teleop/", origin=self.stack.url,
+                                additional_headers={"Cookie": self.cookie}, compression=None)
+        self._task = asyncio.ensure_future(self._hold())
+
+    async def _hold(self) -> None:
+        with contextlib.suppress(Exception):  # the web process may be killed under us
+            while True:
+                await self.ws.send(json.dumps(FORWARD))
+                await asyncio.sleep(0.05)
+
+    async def stop(self) -> None:
+        if self._task:
+            self._task.cancel()
+        with contextlib.suppress(Exception):
+            await self.ws.close()
+
+
+class MotorsWatch:
+    """The simulator's own /rosout 'Motors disabled' lines, with their stamps, over rosbridge."""
+
+    def __init__(self, sim_port: int) -> None:
+        self.url = f"ws://127.0.0.1:{sim_port}"
+        self.disabled_at: list[float] = []
+
+    async def run(self) -> None:
+        async with connect(self.url) as ws:
+            await ws.send(json.dumps({"op": "subscribe", "topic": "/rosout", "type": "rosgraph_msgs/Log"}))
+            async for raw in ws:
+                msg = json.loads(raw).get("msg") or {}
+                if msg.get("name") == "/RosAria" and msg.get("msg", "").startswith("Motors disabled"):
+                    stamp = msg["header"]["stamp"]
+                    self.disabled_at.append(stamp["secs"] + stamp["nsecs"] / 1e9)
+
+    def first_after(self, t0: float, timeout: float = 5.0) -> float:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            hits = [t for t in self.disabled_at if t >= t0]
+            if hits:
+                return hits[0]
+            time.sleep(0.01)
+        raise SystemExit("the motors never went off")
+
+
+async def stop_while_driving(stack: Stack) -> dict[str, list[float]]:
+    driver_cookie, presser = login(stack, "otto"), Api(stack, login(stack, "olga"))
+    sim = Simulator(stack.video_port, "/cmd_vel")
+    motors = MotorsWatch(stack.sim_port)
+    watching = asyncio.ensure_future(motors.run())
+    presser.release_and_enable()
+    driver = Driver(stack, driver_cookie)
+    await driver.start()
+    out: dict[str, list[float]] = {"zero": [], "motors": [], "motion": []}
+    try:
+        for _ in range(TRIALS):
+            before = sim.count()
+            await asyncio.to_thread(sim.first_after, before, moving)  # the held key drives again
+            before = sim.count()
+            t0 = time.time()
+            status, body = await asyncio.to_thread(presser.post, "/api/robot/estop/")
+            assert status == 200, body
+            t_zero = await asyncio.to_thread(sim.first_after, before, zero)
+            out["zero"].append((t_zero - t0) * 1000)
+            out["motors"].append((await asyncio.to_thread(motors.first_after, t0) - t0) * 1000)
+            await asyncio.sleep(max(0.0, t_zero + MOTION_WINDOW_S - time.time()))
+            after = sim._get(sim.count() - before)["messages"]
+            out["motion"].append(sum(1 for m in after if m["t"] > t_zero and moving(m["msg"])))
+            await asyncio.to_thread(presser.release_and_enable)
+    finally:
+        await driver.stop()
+        watching.cancel()
+    return out
+
+
+def banner_on_all_pages(stack: Stack) -> list[float]:
+    from playwright.sync_api import sync_playwright
+
+    from tests.browser.support import CHROMIUM_ARGS
+    from tests.stack import PASSWORD
+
+    api = Api(stack, login(stack, "olga"))
+    latencies: list[float] = []
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        context = browser.new_context(viewport={"width": 1280, "height": 800})
+        page = context.new_page()
+        page.goto(f"{stack.url}/accounts/login/")
+        page.fill("input[name=username]", "otto")
+        page.fill("input[name=password]", PASSWORD)
+        page.click("button[type=submit]")
+        page.wait_for_url(f"{stack.url}/")
+        pages = [page] + [context.new_page() for _ in range(PAGES - 1)]
+        for i, each in enumerate(pages):
+            if i:
+                each.goto(f"{stack.url}{PAGE_PATHS[i % len(PAGE_PATHS)]}")
+            each.wait_for_load_state("load")
+            each.evaluate("""() => {
+                const banner = document.getElementById('estop-banner');
+                window.bannerAt = null;
+                new MutationObserver(() => {
+                    if (!banner.hidden && window.bannerAt === null) window.bannerAt = Date.now();
+                }).observe(banner, { attributes: true });
+            }""")
+        time.sleep(2)  # every page's live socket is open and watching
+        for _ in range(BANNER_TRIALS):
+            for each in pages:
+                each.evaluate("() => { window.bannerAt = null; }")
+            t0 = time.time() * 1000
+            press = threading.Thread(target=api.post, args=("/api/robot/estop/",))
+            press.start()
+            for each in pages:
+                each.wait_for_function("() => window.bannerAt !== null", timeout=10_000)
+                latencies.append(each.evaluate("() => window.bannerAt") - t0)
+            press.join()
+            api.release_and_enable()
+            for each in pages:
+                each.wait_for_function("() => document.getElementById('estop-banner').hidden", timeout=10_000)
+        browser.close()
+    return latencies
+
+
+@contextlib.contextmanager
+def private_redis():
+    port = free_port()
+    proc = subprocess.Popen(["redis-server", "--port", str(port), "--bind", "127.0.0.1", "--save", "",
+                             "--appendonly", "no"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        wait_for_port(port, proc=proc)
+        yield f"redis://127.0.0.1:{port}/0"
+    finally:
+        proc.terminate()
+        proc.wait(5)
+
+
+async def kill_web_while_driving(stack: Stack) -> list[float]:
+    sim = Simulator(stack.video_port, "/cmd_vel")
+    cookie = login(stack, "otto")
+    Api(stack, cookie).release_and_enable()
+    results = []
+    for _ in range(KILLS):
+        driver = Driver(stack, cookie)
+        await driver.start()
+        before = sim.count()
+        await asyncio.to_thread(sim.first_after, before, moving)
+        await asyncio.sleep(0.5)  # steady driving at the teleop rate
+        before = sim.count()
+        t0 = time.time()
+        os.kill(stack.web.pid, signal.SIGKILL)
+        results.append((await asyncio.to_thread(sim.first_after, before, zero) - t0) * 1000)
+        await driver.stop()
+        stack.web.wait(5)
+        stack.start_web()
+        stack.wait_robot_online()
+        await asyncio.sleep(1.2)  # the dead driver's lock expires
+    return results
+
+
+def main() -> None:
+    with Stack() as stack:
+        stack.wait_robot_online()
+        stopped = asyncio.run(stop_while_driving(stack))
+        banners = banner_on_all_pages(stack)
+    # The killed process's driver keeps the drive lock until it expires: make that quick.
+    with private_redis() as redis_url, Stack(redis_url=redis_url, env={"TELEOP_LOCK_TTL_S": "1"}) as stack:
+        stack.wait_robot_online(timeout=40)
+        kills = asyncio.run(kill_web_while_driving(stack))
+    print(f"estop_to_zero_twist_p99_ms: {p99(stopped['zero']):.1f}")
+    print(f"estop_to_zero_twist_p50_ms: {statistics.median(stopped['zero']):.1f}")
+    print(f"estop_to_motors_off_p99_ms: {p99(stopped['motors']):.1f}")
+    print(f"estop_to_motors_off_p50_ms: {statistics.median(stopped['motors']):.1f}")
+    print(f"estop_banner_all_pages_p99_ms: {p99(banners):.1f}")
+    print(f"estop_banner_all_pages_p50_ms: {statistics.median(banners):.1f}")
+    print(f"motion_after_estop_twists: {sum(stopped['motion'])}")
+    print(f"web_kill_to_zero_twist_ms: {max(kills):.1f}")
+    print(f"estop_trials: {len(stopped['zero'])}")
+    print(f"estop_banner_samples: {len(banners)}")
+    print(f"web_kills: {len(kills)}")
+
+
+if __name__ == "__main__":
+    main()
