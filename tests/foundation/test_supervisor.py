@@ -2,6 +2,7 @@
 backoff, its state feeds health, cancellation stops it, a transient task leaves health."""
 
 import asyncio
+import itertools
 import logging
 
 from robot import supervisor
@@ -24,7 +25,7 @@ async def test_it_logs_and_restarts_a_failing_task_and_reports_it(caplog):
     state = supervisor.health()["test.flaky"]
     assert state["state"] == "running" and state["restarts"] == 3
     assert state["last_error"] == "ConnectionError: redis gone 3"
-    gaps = [b - a for a, b in zip(runs, runs[1:], strict=False)]
+    gaps = [b - a for a, b in itertools.pairwise(runs)]
     assert gaps[0] >= supervisor.INITIAL_BACKOFF_S * 0.9 and gaps[1] > gaps[0] * 1.5  # backoff grows
     failures = [r for r in caplog.records if "test.flaky failed" in r.getMessage()]
     assert len(failures) == 3 and all(r.exc_info for r in failures)  # with the traceback

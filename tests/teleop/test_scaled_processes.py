@@ -6,6 +6,7 @@ zero before it exits."""
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import os
 import signal
@@ -76,7 +77,7 @@ def test_driving_reaches_the_robot_at_the_teleop_rate(scaled):
     asyncio.run(hold_w(scaled, 2.0))
     twists = [m for m in received(scaled)[before:] if moving(m)]
     assert len(twists) >= 12, f"only {len(twists)} moving Twists in 2 s"
-    gaps = [b["t"] - a["t"] for a, b in zip(twists, twists[1:], strict=False)]
+    gaps = [b["t"] - a["t"] for a, b in itertools.pairwise(twists)]
     assert max(gaps) < settings.TELEOP_LINK_DEADMAN_S, gaps  # never a stall the link's deadman would cut
 
 
