@@ -18,7 +18,6 @@ import json
 import os
 import signal
 import statistics
-import subprocess
 import sys
 import threading
 import time
@@ -31,7 +30,8 @@ sys.path.insert(0, str(ROOT))
 from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
 from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
-from tests.stack import Stack, free_port, wait_for_port  # noqa: E402
+from tests.stack import Stack  # noqa: E402
+from tests.support_processes import PrivateRedis  # noqa: E402
 
 TRIALS = 10
 MOTION_WINDOW_S = 5.0
@@ -199,19 +199,6 @@ def banner_on_all_pages(stack: Stack) -> list[float]:
     return latencies
 
 
-@contextlib.contextmanager
-def private_redis():
-    port = free_port()
-    proc = subprocess.Popen(["redis-server", "--port", str(port), "--bind", "127.0.0.1", "--save", "",
-                             "--appendonly", "no"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        wait_for_port(port, proc=proc)
-        yield f"redis://127.0.0.1:{port}/0"
-    finally:
-        proc.terminate()
-        proc.wait(5)
-
-
 async def kill_web_while_driving(stack: Stack) -> list[float]:
     sim = Simulator(stack.video_port, "/cmd_vel")
     cookie = login(stack, "otto")
@@ -241,9 +228,13 @@ def main() -> None:
         stopped = asyncio.run(stop_while_driving(stack))
         banners = banner_on_all_pages(stack)
     # The killed process's driver keeps the drive lock until it expires: make that quick.
-    with private_redis() as redis_url, Stack(redis_url=redis_url, env={"TELEOP_LOCK_TTL_S": "1"}) as stack:
-        stack.wait_robot_online(timeout=40)
-        kills = asyncio.run(kill_web_while_driving(stack))
+    redis = PrivateRedis().start()
+    try:
+        with Stack(redis_url=redis.url, env={"TELEOP_LOCK_TTL_S": "1"}) as stack:
+            stack.wait_robot_online(timeout=40)
+            kills = asyncio.run(kill_web_while_driving(stack))
+    finally:
+        redis.stop()
     print(f"estop_to_zero_twist_p99_ms: {p99(stopped['zero']):.1f}")
     print(f"estop_to_zero_twist_p50_ms: {statistics.median(stopped['zero']):.1f}")
     print(f"estop_to_motors_off_p99_ms: {p99(stopped['motors']):.1f}")
