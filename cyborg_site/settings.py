@@ -229,6 +229,12 @@ TELEOP_LINK_DEADMAN_S = env_float("TELEOP_LINK_DEADMAN_S", 0.35, minimum=0.05)
 # After an E-STOP the link keeps publishing zero at the teleop rate for this long.
 ESTOP_HOLD_S = env_float("ESTOP_HOLD_S", 1.0, minimum=0)
 
+# --- Two-way audio ---------------------------------------------------------------------
+# A talker whose audio stops arriving for this long is cut (push-to-talk let go, tab frozen).
+AUDIO_TALK_QUIET_S = env_float("AUDIO_TALK_QUIET_S", 0.4, minimum=0.05)
+# The talk lock frees itself this long after its last refresh (a web process died mid-talk).
+AUDIO_TALK_LOCK_TTL_S = env_float("AUDIO_TALK_LOCK_TTL_S", 3.0, minimum=0.5)
+
 # --- History (issue 7) -----------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)
 HISTORY_MAX_MESSAGE_BYTES = env_int("HISTORY_MAX_MESSAGE_BYTES", 256 * 1024, minimum=1)

@@ -9,7 +9,10 @@ class RobotConfig(AppConfig):
     def ready(self) -> None:
         checks.register(check_robot_settings)
         import robot.navigation.handlers  # noqa: F401  (map renderer + goal tracker wherever the link runs)
+        from robot.link import audio
         from robot.navigation import broadcast
+
+        audio.install()  # microphone relay and speaker format wherever the link runs
 
         broadcast.connect()
 

@@ -43,7 +43,11 @@ Listener = Callable[[str, str, dict[str, Any], float], None]
 # Per-key handlers replace the generic store/fan-out path (e.g. the map renderer).
 Handler = Callable[[ri.Topic, dict[str, Any], float], Awaitable[None] | None]
 
+# Extra link operations other modules add (e.g. robot/link/audio.py): (link, request) -> reply.
+Operation = Callable[["RobotLink", LinkRequest], Awaitable[LinkReply]]
+
 _handlers: dict[str, Handler] = {}
+_operations: dict[str, Operation] = {}
 ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 _array_keys: set[str] = set()
 
@@ -58,6 +62,10 @@ def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> Non
         _array_keys.add(key)
     else:
         _array_keys.discard(key)
+
+
+def register_operation(op: str, operation: Operation) -> None:
+    _operations[op] = operation
 
 
 def array_topics() -> frozenset[str]:
@@ -318,6 +326,8 @@ class RobotLink:
             return {"ok": True}
         if op == "ping":
             return {"ok": True}
+        if op in _operations:
+            return await _operations[op](self, request)
         if op == "estop_release":
             if self.guard is not None:
                 self.guard.release()

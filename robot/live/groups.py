@@ -14,6 +14,9 @@ REPLY_LIST_PREFIX = "redis-list:"
 STATUS_GROUP = "robot.status"
 # Every drive page hears who holds the driving lock.
 LOCK_GROUP = "teleop.lock"
+# Listening pages hear the robot's microphone; audio pages hear who holds the talk lock.
+MIC_GROUP = "audio.mic"
+TALK_GROUP = "audio.talk"
 
 # Latest-state keys the server writes itself (no ROS topic behind them).
 STATUS_KEY = "_link"  # the link's connection status

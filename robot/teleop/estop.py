@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
+from robot.audio.talk import end_all_talk
 from robot.commands.modes import perform_mode
 from robot.commands.pipeline import InvalidCommand, arun_command
 from robot.link.bus import RobotError, acall_service, arequest
@@ -91,6 +92,7 @@ Step = Callable[[str], Awaitable[str]]
 STEPS: tuple[tuple[str, Step], ...] = (
     ("zero_velocity", _zero_velocity),
     ("drive_lock", _block_driving),
+    ("talk", end_all_talk),
     ("cancel_navigation", _cancel_navigation),
     ("disable_motors", _disable_motors),
     ("mode_stop", _mode_stop),

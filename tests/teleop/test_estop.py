@@ -13,7 +13,7 @@ from tests.teleop.support import drive_socket, is_moving, is_zero, key, lock_fra
 # The API runs the async service from a sync view: database_sync_to_async closes the
 # connection a plain test transaction lives on (PostgreSQL), so these tests commit.
 pytestmark = pytest.mark.django_db(transaction=True)
-STEPS = ["latch", "zero_velocity", "drive_lock", "cancel_navigation", "disable_motors", "mode_stop"]
+STEPS = ["latch", "zero_velocity", "drive_lock", "talk", "cancel_navigation", "disable_motors", "mode_stop"]
 STAGE_GOAL = {"header": {"frame_id": ri.MAP_FRAME},
               "pose": {"position": {"x": 6.5, "y": -1.0, "z": 0.0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}}}
 
@@ -54,7 +54,7 @@ def test_it_tries_every_step_and_reports_each_when_the_robot_is_offline(operator
     body = response.json()
     assert body["ok"] is False and body["code"] == "partial"
     assert [s["step"] for s in body["steps"]] == STEPS
-    robot_steps = [s for s in body["steps"] if s["step"] not in ("latch", "drive_lock")]
+    robot_steps = [s for s in body["steps"] if s["step"] not in ("latch", "drive_lock", "talk")]
     assert not any(s["ok"] for s in robot_steps)
     assert all("offline" in s["detail"].lower() for s in robot_steps), body["steps"]
     entry = AuditEntry.objects.get(action="estop")
