@@ -5,8 +5,10 @@ from __future__ import annotations
 from django.conf import settings
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import render
+from django.templatetags.static import static
 from django.urls import reverse
 
+from dashboard.routing import AUDIO_SOCKET_PATH
 from dashboard.routing_teleop import TELEOP_SOCKET_PATH
 from robot.live.keys import DRIVE_KEYS
 
@@ -20,6 +22,8 @@ def drive_config() -> dict[str, object]:
         "stream_url": reverse("dashboard:video-stream"),
         "snapshot_url": reverse("dashboard:video-snapshot"),
         "teleop_socket": TELEOP_SOCKET_PATH,
+        "audio_socket": AUDIO_SOCKET_PATH,
+        "audio_worklet": static("js/audio-capture.js"),
         "keys": list(DRIVE_KEYS),
     }
 

@@ -9,6 +9,11 @@ server → client (text): {"type": "hello", "can_listen", "can_talk", "talker", 
     | {"type": "talker", "holder", "you", "reason"} (to everyone) | {"type": "error", "message", "code"}
 server → client (binary): one microphone chunk as the robot sent it (``format`` says how to play it)
 
+Microphone chunks are relayed as the robot sent them, mp3 included: the browser decodes mp3
+with ``decodeAudioData`` (static/js/audio.js). That keeps the server a relay with no audio
+codec to install or run per chunk on a small ground-station machine, keeps the compressed
+size on the network to every listener, and browsers decode mp3 natively.
+
 Operators and admins may listen and talk; viewers see who talks and are refused the rest.
 Nothing heard or said is stored: the audit trail keeps who listened or talked, when, how long.
 """

@@ -3,6 +3,7 @@
 // deadman; this page only says what the operator's hands are doing, ~20 times a second.
 import { create as createStick } from "../vendor/nipplejs/index.mjs";
 import { notify } from "./api.js";
+import { initAudio } from "./audio.js";
 import { initCommands } from "./commands.js";
 import { readConfig, socketURL, toLogin } from "./config.js";
 import { live } from "./live.js";
@@ -38,6 +39,7 @@ function onUpdate(frame) {
 live.watch(config.keys, onUpdate);
 // Mode buttons, speech box and motor button.
 initCommands(document);
+initAudio(document.getElementById("audio"), config);
 
 // --- camera --------------------------------------------------------------------------------
 const img = $("camera-img");

@@ -25,7 +25,8 @@ def test_fetch_and_websockets_live_in_one_module_each():
     fetching = {p.name for p in SCRIPTS if "fetch(" in p.read_text()}
     assert fetching == {"api.js"}
     live_sockets = {p.name for p in SCRIPTS if "new WebSocket(" in p.read_text()}
-    assert live_sockets == {"live.js", "drive.js"}  # the live socket, and the drive page's teleop socket
+    # the live socket, the drive page's teleop socket, its audio socket
+    assert live_sockets == {"live.js", "drive.js", "audio.js"}
 
 
 def test_pages_share_state_through_imports_not_globals():
