@@ -4,6 +4,7 @@ The fixtures are registered in tests/conftest.py so every folder shares one stac
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 
@@ -42,24 +43,30 @@ DESKTOP = {"width": 1366, "height": 800}
 PHONE = {"width": 390, "height": 844}
 
 
+@contextlib.contextmanager
+def fresh_page(browser, **context_args):
+    """A page in a context of its own (cookies, permissions), closed afterwards."""
+    context = browser.new_context(**context_args)
+    page = context.new_page()
+    page.set_default_timeout(15_000)
+    try:
+        yield page
+    finally:
+        context.close()
+
+
 @pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
 def sized_page(request, browser):
     """A page at a desktop and at a phone width (the test runs once for each)."""
     phone = request.param is PHONE
-    context = browser.new_context(viewport=request.param, is_mobile=phone, has_touch=phone)
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    yield page
-    context.close()
+    with fresh_page(browser, viewport=request.param, is_mobile=phone, has_touch=phone) as page:
+        yield page
 
 
 @pytest.fixture
 def page(browser):
-    context = browser.new_context(viewport={"width": 1280, "height": 900})
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    yield page
-    context.close()
+    with fresh_page(browser, viewport={"width": 1280, "height": 900}) as page:
+        yield page
 
 
 def login(page, stack: Stack, username: str, *, next_path: str = "/") -> None:

@@ -15,7 +15,7 @@ from playwright.sync_api import expect
 
 from robot import interface as ri
 from robot.sim.audio import dominant_hz
-from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, login
+from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, fresh_page, login
 
 pytestmark = pytest.mark.browser
 TEST_TONE_HZ = 700.0
@@ -44,11 +44,8 @@ def media_browser(browser, tmp_path_factory):
 
 @pytest.fixture
 def media_page(media_browser):
-    context = media_browser.new_context(viewport={"width": 1280, "height": 900})
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    yield page
-    context.close()
+    with fresh_page(media_browser, viewport={"width": 1280, "height": 900}) as page:
+        yield page
 
 
 class SpeakerTap:
