@@ -1,3 +1,6 @@
+import math
+
+from django import forms
 from django.contrib import admin
 
 from robot.models import AuditEntry, DomeMode, EmotionPreset, Location, SoundClip
@@ -34,7 +37,34 @@ class DomeModeAdmin(admin.ModelAdmin):
     list_display = ("name", "label", "description")
 
 
+class LocationForm(forms.ModelForm):
+    """People read headings in degrees (as on the map page); the robot and the API use radians."""
+
+    heading_deg = forms.FloatField(
+        label="Heading (°)", initial=0.0, min_value=-360.0, max_value=360.0,
+        help_text="Degrees, counter-clockwise from the map's x axis (as on the map page).")
+
+    class Meta:
+        model = Location
+        fields = ("name", "map_name", "x", "y", "heading_deg", "threshold", "description")
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        if self.instance.pk is not None:
+            self.initial["heading_deg"] = round(math.degrees(self.instance.yaw), 1)
+
+    def save(self, commit: bool = True) -> Location:
+        self.instance.yaw = math.radians(self.cleaned_data["heading_deg"])
+        return super().save(commit)
+
+
 @admin.register(Location)
 class LocationAdmin(admin.ModelAdmin):
-    list_display = ("name", "map_name", "x", "y", "yaw", "threshold")
+    form = LocationForm
+    fields = LocationForm.Meta.fields
+    list_display = ("name", "map_name", "x", "y", "heading", "threshold")
     search_fields = ("name", "description")
+
+    @admin.display(description="Heading (°)", ordering="yaw")
+    def heading(self, location: Location) -> str:
+        return f"{math.degrees(location.yaw):.0f}"

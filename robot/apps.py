@@ -8,9 +8,9 @@ class RobotConfig(AppConfig):
 
     def ready(self) -> None:
         checks.register(check_robot_settings)
-        import robot.navigation.handlers  # noqa: F401  (map renderer + goal tracker wherever the link runs)
+        # Wherever the link runs: the map renderer, the goal tracker, where the robot is.
         from robot.link import audio
-        from robot.navigation import broadcast
+        from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
 
         audio.install()  # microphone relay and speaker format wherever the link runs
 

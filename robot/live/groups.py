@@ -25,6 +25,7 @@ MAP_META_KEY = "map_meta"  # the map's metadata (the grid itself never goes into
 GOAL_KEY = "nav_goal"  # the goal this server sent last
 GOAL_STATUS_KEY = "nav_goal_status"  # what the robot reported for recent goals
 LOCATIONS_KEY = "nav_locations"  # sent on change only, never stored
+AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its word or its pose
 LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
 
 

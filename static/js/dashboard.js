@@ -30,7 +30,7 @@ const renderers = {
     set("mode.requested", `${m.mode} · ${status}`);
   },
   robot_mode(m) { if (!latest.mode_request) set("mode.requested", m.data || "—"); },
-  current_location(m) { set("location.current", m.data || "(none)"); },
+  at_location(m) { set("location.current", m.name || "(none)"); },
   smach_status(m) {
     smachActive[m.path] = m.active_states || [];
     const chain = smachChain();

@@ -98,9 +98,9 @@ const onUpdate = {
       `x ${state.robot.x.toFixed(2)} m · y ${state.robot.y.toFixed(2)} m · ${(state.robot.yaw * 180 / Math.PI).toFixed(0)}°`;
   },
   plan(m) { state.plan = (m.poses || []).map((p) => [p.pose.position.x, p.pose.position.y]); },
-  current_location(m) {
-    state.currentLocation = m.data;
-    $("current-location").textContent = m.data || "(none)";
+  at_location(m) {
+    state.currentLocation = m.name;
+    $("current-location").textContent = m.name || "(none)";
   },
   map_meta(m) { showMap(m); },
   nav_goal(m) { state.goal = m; renderGoal(); },
@@ -203,7 +203,7 @@ function renderLocations() {
     name.title = loc.description || "";
     const where = document.createElement("span");
     where.className = "muted small";
-    where.textContent = `${loc.x.toFixed(2)}, ${loc.y.toFixed(2)}`;
+    where.textContent = `${loc.x.toFixed(2)}, ${loc.y.toFixed(2)} m · ${(loc.yaw * 180 / Math.PI).toFixed(0)}°`;
     const go = button("Go", () => goTo(loc.name), "btn btn-small");
     const del = button("×", () => removeLocation(loc.name), "btn btn-small");
     del.setAttribute("aria-label", `Delete ${loc.name}`);

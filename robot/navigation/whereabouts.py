@@ -1,0 +1,81 @@
+"""Which named location the robot is at, for the pages' "At location".
+
+The robot's own navigation node answers for the places in its database; a place added here
+(admin, API, map page) is unknown to it, so after arriving there it says "". Then the server
+answers from its own named locations: the nearest whose arrival radius holds the robot's pose.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+from collections.abc import Iterable
+from typing import Any
+
+from asgiref.sync import sync_to_async
+
+from robot import interface as ri
+from robot.link.connection import RobotLink
+from robot.link.hosting import register_background
+from robot.live.announce import apublish_state
+from robot.live.groups import AT_LOCATION_KEY
+
+# A named place as (name, x, y, arrival radius).
+Place = tuple[str, float, float, float]
+RECHECK_S = 0.5  # at most this often; poses arrive at 10 Hz
+PLACES_FRESH_S = 2.0  # a location added or moved shows within this
+
+
+def location_at(x: float, y: float, places: Iterable[Place]) -> str:
+    """The nearest place whose radius holds (x, y); "" if none."""
+    inside = [(math.hypot(x - px, y - py), name) for name, px, py, radius in places
+              if math.hypot(x - px, y - py) <= radius]
+    return min(inside)[1] if inside else ""
+
+
+def whereabouts(robot_says: str, pose: dict[str, Any] | None, places: Iterable[Place]) -> dict[str, str]:
+    if robot_says:
+        return {"name": robot_says, "source": "robot"}
+    if pose is None:
+        return {"name": "", "source": ""}
+    name = location_at(float(pose["position"]["x"]), float(pose["position"]["y"]), places)
+    return {"name": name, "source": "server" if name else ""}
+
+
+def _places() -> list[Place]:
+    from robot.models import Location
+
+    return list(Location.objects.values_list("name", "x", "y", "threshold"))
+
+
+async def track_whereabouts(link: RobotLink) -> None:
+    pose_topic, location_topic = ri.topic("robot_pose").name, ri.topic("current_location").name
+    latest: dict[str, Any] = {}
+    wake = asyncio.Event()
+
+    def listener(name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        if name in (pose_topic, location_topic):
+            latest[name] = msg
+            wake.set()
+
+    link.listeners.append(listener)
+    shown: dict[str, str] | None = None
+    places: list[Place] = []
+    places_at = -math.inf
+    try:
+        while True:
+            await wake.wait()
+            wake.clear()
+            if time.monotonic() - places_at > PLACES_FRESH_S:
+                places, places_at = await sync_to_async(_places)(), time.monotonic()
+            now = whereabouts((latest.get(location_topic) or {}).get("data", ""), latest.get(pose_topic), places)
+            if now != shown:
+                shown = now
+                await apublish_state(AT_LOCATION_KEY, now)
+            await asyncio.sleep(RECHECK_S)
+    finally:
+        link.listeners.remove(listener)
+
+
+register_background("navigation-whereabouts", track_whereabouts)
