@@ -208,16 +208,16 @@ BATTERY_LOW_PERCENT = env_float("BATTERY_LOW_PERCENT", 20.0, minimum=0)
 # Embedded default: host the link inside the Daphne process (off only for special setups).
 ROBOT_LINK_EMBEDDED = env_bool("ROBOT_LINK_EMBEDDED", True)
 
-# --- Commanding (issue 4) --------------------------------------------------------------
+# --- Commanding ------------------------------------------------------------------------
 MODE_COMMANDER = env_choice("MODE_COMMANDER", "server", ("server", "robot"))
 COMMAND_THROTTLE_RATE = env_str("COMMAND_THROTTLE_RATE", "120/min")
 # The page flags "requested X, state machine in Y" once a mode request is this old.
 MODE_MISMATCH_GRACE_S = env_float("MODE_MISMATCH_GRACE_S", 3.0, minimum=0.5)
 
-# --- Map and navigation (issue 5) ------------------------------------------------------
+# --- Map and navigation ----------------------------------------------------------------
 NAVIGATION_BACKEND = env_choice("NAVIGATION_BACKEND", "move_base", ("move_base", "cyborg_navigation"))
 
-# --- Teleop and video (issue 6) --------------------------------------------------------
+# --- Teleop and video ------------------------------------------------------------------
 TELEOP_RATE_HZ = env_float("TELEOP_RATE_HZ", 10.0, minimum=1)
 TELEOP_DEADMAN_S = env_float("TELEOP_DEADMAN_S", 0.5, minimum=0.05)
 TELEOP_MAX_LINEAR = env_float("TELEOP_MAX_LINEAR", 0.5, minimum=0)
@@ -235,7 +235,7 @@ AUDIO_TALK_QUIET_S = env_float("AUDIO_TALK_QUIET_S", 0.4, minimum=0.05)
 # The talk lock frees itself this long after its last refresh (a web process died mid-talk).
 AUDIO_TALK_LOCK_TTL_S = env_float("AUDIO_TALK_LOCK_TTL_S", 3.0, minimum=0.5)
 
-# --- History (issue 7) -----------------------------------------------------------------
+# --- History ---------------------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)
 HISTORY_MAX_MESSAGE_BYTES = env_int("HISTORY_MAX_MESSAGE_BYTES", 256 * 1024, minimum=1)
 # The recorder writes every-message topics at most this long after they arrive, in batches.

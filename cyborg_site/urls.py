@@ -4,6 +4,8 @@ from django.templatetags.static import static
 from django.urls import include, path
 from django.views.generic import RedirectView
 
+from history.urls import api_urlpatterns as history_api
+
 urlpatterns = [
     path("admin/", admin.site.urls),
     # Browsers ask for it on pages without an icon link (the admin); not permanent, the name may be hashed.
@@ -11,7 +13,7 @@ urlpatterns = [
     path("accounts/login/", auth_views.LoginView.as_view(redirect_authenticated_user=True), name="login"),
     path("accounts/logout/", auth_views.LogoutView.as_view(), name="logout"),
     path("api/", include("robot.api.urls")),
-    path("api/history/", include("history.api_urls")),
+    path("api/history/", include(history_api)),
     path("history/", include("history.urls")),
     path("", include("dashboard.urls")),
 ]

@@ -8,8 +8,7 @@ from django.shortcuts import render
 from django.templatetags.static import static
 from django.urls import reverse
 
-from dashboard.routing import AUDIO_SOCKET_PATH
-from dashboard.routing_teleop import TELEOP_SOCKET_PATH
+from dashboard.routing import AUDIO_SOCKET_PATH, TELEOP_SOCKET_PATH
 from robot.live.keys import DRIVE_KEYS
 
 

@@ -1,7 +1,41 @@
-from django.urls import include, path
+from django.contrib.auth.decorators import login_required
+from django.urls import path
+from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
+from rest_framework.permissions import IsAuthenticated
+from rest_framework.routers import SimpleRouter
+
+from robot.api import commands, navigation
+from robot.api.audit import AuditListView
+from robot.api.auth import TokenView
+from robot.api.common import API_AUTHENTICATION
+from robot.api.state import RobotStateView
+from robot.api.teleop import EstopReleaseView, EstopView
+
+router = SimpleRouter()
+router.register("locations", navigation.LocationViewSet, basename="api-location")
 
 urlpatterns = [
-    path("", include("robot.api.urls_commands")),
-    path("", include("robot.api.urls_navigation")),
-    path("", include("robot.api.urls_teleop")),
+    path("auth/token/", TokenView.as_view(), name="api-token"),
+    path("robot/state/", RobotStateView.as_view(), name="api-robot-state"),
+    path("robot/mode/", commands.ModeView.as_view(), name="api-robot-mode"),
+    path("robot/event/", commands.EventView.as_view(), name="api-robot-event"),
+    path("robot/speech/", commands.SpeechView.as_view(), name="api-robot-speech"),
+    path("robot/emotion/", commands.EmotionView.as_view(), name="api-robot-emotion"),
+    path("robot/emotion-system/", commands.EmotionSystemView.as_view(), name="api-robot-emotion-system"),
+    path("robot/motors/", commands.MotorsView.as_view(), name="api-robot-motors"),
+    path("robot/playback/", commands.PlaybackView.as_view(), name="api-robot-playback"),
+    path("robot/dome/", commands.DomeView.as_view(), name="api-robot-dome"),
+    path("robot/estop/", EstopView.as_view(), name="robot-estop"),
+    path("robot/estop/release/", EstopReleaseView.as_view(), name="robot-estop-release"),
+    path("audit/", AuditListView.as_view(), name="api-audit"),
+    path("map/", navigation.map_view, name="api-map"),
+    path("navigation/goal/", navigation.goal_view, name="api-navigation-goal"),
+    path("navigation/cancel/", navigation.cancel_view, name="api-navigation-cancel"),
+    path("navigation/status/", navigation.status_view, name="api-navigation-status"),
+    path("navigation/initial-pose/", navigation.initial_pose_view, name="api-navigation-initial-pose"),
+    *router.urls,
+    path("schema/", SpectacularAPIView.as_view(authentication_classes=API_AUTHENTICATION,
+                                                 permission_classes=[IsAuthenticated]), name="api-schema"),
+    # Swagger UI from drf-spectacular-sidecar's static files: works without internet access.
+    path("docs/", login_required(SpectacularSwaggerView.as_view(url_name="api-schema")), name="api-docs"),
 ]

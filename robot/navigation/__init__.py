@@ -1,1 +1,1 @@
-"""Map and navigation: the rendered map, goals, initial pose and named locations (issue 5)."""
+"""Map and navigation: the rendered map, goals, initial pose and named locations."""
