@@ -9,6 +9,9 @@ from django.conf import settings
 from robot import interface as ri
 from robot.live.keys import HOME_KEYS
 
+# An error from the robot log stays on the dashboard's alert strip this long unless dismissed.
+ALERT_TTL_S = 600
+
 
 def dashboard_context() -> dict[str, Any]:
     return {
@@ -19,5 +22,6 @@ def dashboard_context() -> dict[str, Any]:
             "log_levels": ri.LOG_LEVELS,
             "recharge_states": ri.RECHARGE_STATES,
             "rosbridge_url": settings.ROSBRIDGE_URL,
+            "alert_ttl_s": ALERT_TTL_S,
         },
     }

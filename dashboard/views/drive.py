@@ -11,6 +11,9 @@ from django.urls import reverse
 from dashboard.routing import AUDIO_SOCKET_PATH, TELEOP_SOCKET_PATH
 from robot.live.keys import DRIVE_KEYS
 
+# Without a new camera frame for this long the picture is shown as unavailable.
+CAMERA_STALE_S = 2.0
+
 
 def drive_config() -> dict[str, object]:
     return {
@@ -23,6 +26,7 @@ def drive_config() -> dict[str, object]:
         "teleop_socket": TELEOP_SOCKET_PATH,
         "audio_socket": AUDIO_SOCKET_PATH,
         "audio_worklet": static("js/audio-capture.js"),
+        "camera_stale_s": CAMERA_STALE_S,
         "keys": list(DRIVE_KEYS),
     }
 

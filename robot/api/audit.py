@@ -3,6 +3,8 @@ monitoring: viewers see what operators did); filters ?user= &action= &source= &o
 
 from __future__ import annotations
 
+from datetime import UTC
+
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import generics, serializers
 from rest_framework.pagination import PageNumberPagination
@@ -13,6 +15,8 @@ from robot.models import AuditEntry
 
 
 class AuditEntryOut(serializers.ModelSerializer):
+    created = serializers.DateTimeField(read_only=True, default_timezone=UTC)  # APIs speak UTC
+
     class Meta:
         model = AuditEntry
         fields = ["id", "created", "username", "source", "action", "params", "ok", "outcome", "error_code"]

@@ -90,7 +90,9 @@ class Renderer:
         draw.ellipse((px - rad, py - rad, px + rad, py + rad), fill=(220, 60, 40), outline=(0, 0, 0))
         draw.line((px, py, px + rad * 1.6 * math.cos(b.yaw), py - rad * 1.6 * math.sin(b.yaw)),
                   fill=(0, 0, 0), width=3)
-        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime()) + f".{int(time.time() * 1000) % 1000:03d}"
+        now = time.time()
+        local = time.localtime(now)
+        stamp = f"{time.strftime('%Y-%m-%d %H:%M:%S', local)}.{int(now * 1000) % 1000:03d} {time.strftime('%Z', local)}"
         text = f"{stamp}  x={b.x:.2f} y={b.y:.2f} state={r.sm.state} emotion={r.emotions.name}"
         draw.rectangle((0, 0, width, 16), fill=(0, 0, 0))
         draw.text((4, 2), text, fill=(255, 255, 255))

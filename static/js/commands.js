@@ -6,6 +6,7 @@
 import { notify, postJSON } from "./api.js";
 import { site } from "./config.js";
 import { live } from "./live.js";
+import { formatTime } from "./time.js";
 
 const KEYS = ["state_change", "state_transitions", "mode_request"];
 
@@ -28,9 +29,10 @@ export async function sendCommand(command, body, { control = null, result = null
   }
 }
 
+// The card's result line: what the robot was told, when, and whether it worked.
 function showResult(el, text, ok) {
   if (!el) return;
-  el.textContent = text;
+  el.textContent = `${ok ? "✓" : "✗"} ${text} · ${formatTime(Date.now() / 1000, { date: false })}`;
   el.classList.toggle("result-ok", ok);
   el.classList.toggle("result-bad", !ok);
 }
@@ -54,11 +56,12 @@ export function initCommands(root = document) {
   const set = (name, text) => field(name).forEach((el) => { el.textContent = text; });
   const configEl = root.querySelector("[data-commands='mode'][data-config]");
   const config = configEl ? JSON.parse(configEl.dataset.config) : null;
-  const seen = { request: null, requestAt: 0, state: null };
+  const seen = { request: null, requestAt: 0, state: null, since: null };
 
   function resultFor(el) {
     const name = el.dataset.resultTarget || el.dataset.command;
-    return el.closest(".card, [data-commands]")?.querySelector(`[data-result="${name}"]`) || null;
+    const card = el.closest(".card, [data-commands]");
+    return card?.querySelector(`[data-result="${name}"]`) || card?.querySelector('[data-result="*"]') || null;
   }
 
   root.addEventListener("click", (ev) => {
@@ -107,16 +110,28 @@ export function initCommands(root = document) {
     });
   }
 
+  // A request that failed before the robot (re)connected says nothing about it now.
+  function currentRequest() {
+    const r = seen.request;
+    if (r?.status === "failed" && seen.since && seen.requestAt < seen.since) return null;
+    return r;
+  }
+
   function renderMode() {
     if (!config) return;
-    const r = seen.request;
+    const r = currentRequest();
     const state = seen.state;
     root.querySelectorAll("[data-mode]").forEach((b) => {
       const on = r?.mode === b.dataset.mode;
       b.classList.toggle("active", on);
       b.setAttribute("aria-pressed", String(on));
     });
-    if (!r) { set("mode.reached", state ?? "—"); return; }
+    if (!r) {
+      set("mode.request", "—");
+      set("mode.reached", state ?? "—");
+      field("mode.mismatch").forEach((el) => { el.hidden = true; });
+      return;
+    }
     const status = { running: "applying…", sent: "sent", failed: `failed: ${r.error}` }[r.status] || r.status;
     set("mode.request", `${r.mode}${r.by ? ` by ${r.by}` : ""} · ${status}`);
     const ok = reached(config, r.mode, state);
@@ -142,6 +157,7 @@ export function initCommands(root = document) {
   }
 
   live.watch(KEYS, onUpdate);
+  live.onStatus((status) => { seen.since = status.connected ? status.since : null; renderMode(); });
   setInterval(renderMode, 1000);
   return { send: sendCommand };
 }

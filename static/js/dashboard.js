@@ -1,9 +1,10 @@
 // The dashboard: live cards, alerts, the robot log, and the command cards.
 import { notify } from "./api.js";
+import { AlertStrip } from "./alerts.js";
 import { initCommands } from "./commands.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
-import { formatAge } from "./time.js";
+import { formatAge, formatTime } from "./time.js";
 
 const config = readConfig("live-config");
 const latest = {}; // key -> {msg, t}
@@ -33,15 +34,13 @@ const renderers = {
   at_location(m) { set("location.current", m.name || "(none)"); },
   smach_status(m) {
     smachActive[m.path] = m.active_states || [];
-    const chain = smachChain();
-    set("smach.active", chain.join(" › ") || "—");
-    if (!sawStateChange && chain.length) set("smach.current", chain[chain.length - 1]);
+    set("smach.active", smachChain().join(" › ") || "—");
+    renderHeadline();
   },
   state_change(m) {
-    sawStateChange = true;
-    set("smach.current", m.to_system_state);
     set("smach.previous", m.from_system_state || "—");
     set("smach.event", m.event || "—");
+    renderHeadline();
   },
   emotional_state(m) {
     set("emotion.name", m.to_emotional_state);
@@ -58,13 +57,12 @@ const renderers = {
   emotion_system_status(m) { set("emotion.system", m.data ? "system on" : "system off"); },
   text_to_speech(m) { set("tts.last", m.data); },
   tts_feedback(m) { set("tts.feedback", m.data); },
-  rosout(m) { logLine(m); },
+  rosout(m, t) { logLine(m, t); },
 };
 
 // SMACH introspection: each container reports its active states; the chain from the
 // top container down names where the robot is even before the next transition.
 const smachActive = {};
-let sawStateChange = false;
 function smachChain() {
   const chain = [];
   for (const path of Object.keys(smachActive).sort((a, b) => a.length - b.length)) {
@@ -77,19 +75,18 @@ function smachChain() {
   return chain;
 }
 
-// --- alerts strip ----------------------------------------------------------------------
-const alerts = document.getElementById("alerts");
-function alertIf(id, on, text, level = "warn") {
-  let el = alerts.querySelector(`[data-alert="${id}"]`);
-  if (!on) { el?.remove(); return; }
-  if (!el) {
-    el = document.createElement("div");
-    el.dataset.alert = id;
-    el.className = `alert alert-${level}`;
-    alerts.append(el);
-  }
-  el.textContent = text;
+// The headline is the newer of the last transition and the introspection's active state:
+// after a robot restart the store still holds the transition from before it.
+function renderHeadline() {
+  const change = latest.state_change, status = latest.smach_status;
+  const chain = smachChain();
+  const fromStatus = status && chain.length && (!change || status.t >= change.t);
+  set("smach.current", fromStatus ? chain[chain.length - 1] : (change?.msg.to_system_state ?? "—"));
 }
+
+// --- alerts strip ----------------------------------------------------------------------
+const alerts = new AlertStrip(document.getElementById("alerts"), { ttlS: config.alert_ttl_s });
+const alertIf = (id, on, text, level) => alerts.condition(id, on, text, level);
 
 // --- log console -----------------------------------------------------------------------
 const logBox = document.getElementById("log");
@@ -99,9 +96,16 @@ const held = [];
 let paused = false;
 const MAX_LINES = 500;
 
-function logLine(m) {
+// When the line was logged: the robot's stamp, or when the server received it.
+function stampOf(m, t) {
+  const s = m.header?.stamp;
+  return s && s.secs ? s.secs + s.nsecs / 1e9 : t;
+}
+
+function logLine(m, t) {
+  m.at = stampOf(m, t);
   if (m.level >= 8) {
-    alertIf(`log-${m.name}`, true, `${config.log_levels[m.level]} from ${m.name}: ${m.msg}`, "error");
+    alerts.event(`log-${m.name}`, `${config.log_levels[m.level]} from ${m.name}: ${m.msg}`, { at: m.at });
   }
   if (paused) { held.push(m); document.getElementById("log-held").textContent = `${held.length} new lines held while paused`; return; }
   appendLine(m);
@@ -112,8 +116,7 @@ function appendLine(m) {
   const levelName = config.log_levels[m.level] || String(m.level);
   row.className = `log-line log-${levelName.toLowerCase()}`;
   row.dataset.level = m.level;
-  const stamp = m.header?.stamp ? new Date((m.header.stamp.secs + m.header.stamp.nsecs / 1e9) * 1000) : new Date();
-  row.textContent = `${stamp.toLocaleTimeString()} [${levelName}] ${m.name}: ${m.msg}`;
+  row.textContent = `${formatTime(m.at)} [${levelName}] ${m.name}: ${m.msg}`;
   row.hidden = m.level < Number(levelSelect.value);
   const atBottom = logBox.scrollTop + logBox.clientHeight >= logBox.scrollHeight - 4;
   logBox.append(row);
@@ -131,7 +134,12 @@ pauseBtn.addEventListener("click", () => {
   pauseBtn.setAttribute("aria-pressed", String(paused));
   if (!paused) { held.splice(0).forEach(appendLine); document.getElementById("log-held").textContent = ""; }
 });
-document.getElementById("log-clear").addEventListener("click", () => { logBox.replaceChildren(); });
+document.getElementById("log-clear").addEventListener("click", () => {
+  logBox.replaceChildren();
+  held.length = 0;
+  document.getElementById("log-held").textContent = "";
+  alerts.clear();
+});
 
 // --- connection card and ages ----------------------------------------------------------
 function renderStatus(s) {
@@ -161,7 +169,7 @@ setInterval(tickAges, 1000);
 
 live.watch(config.keys, (frame) => {
   latest[frame.key] = frame;
-  try { renderers[frame.key]?.(frame.msg); } catch (e) { console.error("render", frame.key, e); }
+  try { renderers[frame.key]?.(frame.msg, frame.t); } catch (e) { console.error("render", frame.key, e); }
   tickAges();
 });
 live.onStatus(renderStatus);

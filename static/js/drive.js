@@ -7,6 +7,7 @@ import { initAudio } from "./audio.js";
 import { initCommands } from "./commands.js";
 import { readConfig, socketURL, toLogin } from "./config.js";
 import { live } from "./live.js";
+import { formatAge } from "./time.js";
 
 const config = readConfig("drive-config");
 const card = document.getElementById("drive");
@@ -37,19 +38,69 @@ function onUpdate(frame) {
   }
 }
 live.watch(config.keys, onUpdate);
+live.onStatus((status) => {
+  const online = !!status.connected;
+  if (online === robotOnline) return;
+  robotOnline = online;
+  if (!online && sending) stopInput("release");
+  renderLock();
+});
 // Mode buttons, speech box and motor button.
 initCommands(document);
 initAudio(document.getElementById("audio"), config);
 
 // --- camera --------------------------------------------------------------------------------
+// An MJPEG <img> fires "load" once, not once per frame, so a new frame is noticed when a small
+// sample of the picture changes. No new frame for camera_stale_s: greyed out, "camera
+// unavailable", and a fresh stream every few seconds until frames flow again.
+const camera = $("camera");
 const img = $("camera-img");
 const placeholder = $("camera-placeholder");
+const STALE_MS = config.camera_stale_s * 1000;
+const RESTART_MS = 3000;
+const sampler = document.createElement("canvas");
+sampler.width = 64; sampler.height = 48;
+const sampleCtx = sampler.getContext("2d", { willReadFrequently: true });
+const frames = { lastAt: 0, lastHash: null, streamAt: 0 };
 let retryTimer = null;
+
 function startCamera() {
   clearInterval(retryTimer);
+  frames.streamAt = Date.now();
   img.src = `${config.stream_url}?t=${Date.now()}`;
 }
-img.addEventListener("load", () => { placeholder.hidden = true; img.hidden = false; });
+
+function pictureHash() {
+  sampleCtx.drawImage(img, 0, 0, sampler.width, sampler.height);
+  const data = sampleCtx.getImageData(0, 0, sampler.width, sampler.height).data;
+  let h = 0;
+  for (let i = 0; i < data.length; i += 1) h = (h * 31 + data[i]) | 0;
+  return h;
+}
+
+function watchFrames() {
+  const now = Date.now();
+  if (!img.hidden && img.naturalWidth) {
+    const h = pictureHash();
+    if (h !== frames.lastHash) { frames.lastHash = h; frames.lastAt = now; }
+  }
+  const age = frames.lastAt ? now - frames.lastAt : null;
+  const stale = age == null ? now - frames.streamAt > STALE_MS : age > STALE_MS;
+  camera.dataset.state = stale ? "stale" : (age == null ? "connecting" : "live");
+  camera.dataset.frameAge = age == null ? "" : (age / 1000).toFixed(1);
+  $("camera-age").textContent = age == null ? (stale ? "no frame" : "connecting…")
+    : stale ? `last frame ${formatAge(age / 1000)}` : `frame ${(age / 1000).toFixed(1)} s old`;
+  if (stale) {
+    placeholder.hidden = false;
+    if (img.hidden) return; // the error handler counts down to its own retry
+    $("camera-retry").textContent = age == null ? "Waiting for the first frame…" : `No new frame for ${Math.round(age / 1000)} s.`;
+    if (now - frames.streamAt > RESTART_MS + STALE_MS) startCamera();
+  } else if (!img.hidden) {
+    placeholder.hidden = true;
+  }
+}
+
+img.addEventListener("load", () => { img.hidden = false; });
 img.addEventListener("error", () => {
   placeholder.hidden = false;
   img.hidden = true;
@@ -63,10 +114,12 @@ img.addEventListener("error", () => {
   }, 1000);
 });
 startCamera();
+setInterval(watchFrames, 250);
 
 // --- teleop socket ----------------------------------------------------------------------
 const lock = { holder: null, you: false };
 let estop = null; // the E-STOP message while it is latched: no input is sent
+let robotOnline = false;
 let ws = null;
 let wsDelay = 500;
 let lastError = { message: "", at: 0 };
@@ -93,10 +146,12 @@ function renderLock() {
   el.classList.toggle("lock-you", lock.you);
   el.classList.toggle("lock-other", !lock.you && !!lock.holder);
   card.classList.toggle("locked-out", !lock.you && !!lock.holder);
+  card.classList.toggle("robot-offline", !robotOnline);
+  $("drive-offline").hidden = robotOnline;
   const show = (id, on) => { const b = $(id); if (b) b.hidden = !on; };
-  show("lock-acquire", canDrive && !estop && !lock.you && !lock.holder);
+  show("lock-acquire", canDrive && robotOnline && !estop && !lock.you && !lock.holder);
   show("lock-release", lock.you);
-  show("lock-takeover", canTakeover && !lock.you && !!lock.holder);
+  show("lock-takeover", canTakeover && robotOnline && !lock.you && !!lock.holder);
 }
 
 function setCommanded(linear, angular) {
@@ -165,6 +220,7 @@ function inputFrame(input) {
 
 function inputChanged() {
   if (!canDrive) return;
+  if (!robotOnline) { if (sending) stopInput("release"); return; }
   const input = currentInput();
   const moving = input.linear !== 0 || input.angular !== 0;
   if (moving) {

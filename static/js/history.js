@@ -3,7 +3,7 @@
 // text topics as a table of messages, presets, state timeline, exports.
 import { getJSON, notify } from "./api.js";
 import { readConfig } from "./config.js";
-import { formatDuration, formatTime, zoneLabel } from "./time.js";
+import { formatDuration, formatTime, parseSiteTime, toSiteInput, zone, zoneLabel } from "./time.js";
 
 const config = readConfig("history-config");
 const $ = (id) => document.getElementById(id);
@@ -46,9 +46,10 @@ function showView(name) {
 function range() {
   const choice = $("range").value;
   if (choice === "custom") {
-    const start = Date.parse($("start").value) / 1000;
-    const end = Date.parse($("end").value) / 1000;
-    if (!isFinite(start) || !isFinite(end) || start >= end) throw new Error("Pick a start before the end.");
+    const start = parseSiteTime($("start").value);
+    const end = parseSiteTime($("end").value);
+    if (!isFinite(start) || !isFinite(end)) throw new Error(`Write From and To as YYYY-MM-DD HH:MM (${zone} time).`);
+    if (start >= end) throw new Error("Pick a start before the end.");
     return { start, end };
   }
   const end = Date.now() / 1000;
@@ -90,7 +91,8 @@ function draw(fields, data, unit) {
   const el = $("chart");
   chart = new uPlot({
     width: el.clientWidth || 800, height: 360, series, bands,
-    scales: { x: { time: true } }, axes: [{}, { label: unit || undefined }],
+    scales: { x: { time: true } }, axes: [{ label: `time (${zoneLabel()})` }, { label: unit || undefined }],
+    tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), zone),
     legend: { live: true },
     // A drag selects a stretch; we fetch finer buckets for it rather than stretch the coarse ones.
     cursor: { drag: { x: true, y: false, setScale: false } },
@@ -247,7 +249,16 @@ function exportURL(format) {
 }
 
 $("topic").addEventListener("change", () => fillFields());
-$("range").addEventListener("change", () => { $("custom-range").hidden = $("range").value !== "custom"; });
+$("range").addEventListener("change", () => {
+  const custom = $("range").value === "custom";
+  $("custom-range").hidden = !custom;
+  if (custom && !$("start").value) {
+    const now = Date.now() / 1000;
+    $("start").value = toSiteInput(now - 3600);
+    $("end").value = toSiteInput(now);
+  }
+});
+document.querySelectorAll("[data-zone-label]").forEach((el) => { el.textContent = `${zone} (${zoneLabel()})`; });
 $("plot-form").addEventListener("submit", (ev) => {
   ev.preventDefault();
   const topic = $("topic").value;

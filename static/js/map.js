@@ -5,7 +5,7 @@ import { readConfig } from "./config.js";
 import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
 import { attachGestures } from "./map/gestures.js";
-import { quaternionToYaw, View } from "./map/view.js";
+import { formatMetres, quaternionToYaw, scaleBar, View } from "./map/view.js";
 
 const config = readConfig("map-config");
 const locationURL = (template, name) => template.replace("{name}", encodeURIComponent(name));
@@ -48,10 +48,20 @@ function scheduleDraw() {
   });
 }
 
+function renderScale() {
+  const bar = scaleBar(view);
+  const el = $("map-scale");
+  el.hidden = false;
+  el.dataset.metres = String(bar.metres);
+  el.querySelector(".map-scale-bar").style.width = `${bar.px}px`;
+  el.querySelector(".map-scale-label").textContent = formatMetres(bar.metres);
+}
+
 function applyView() {
   if (!view.meta) return;
   img.style.transform = `translate(${view.tx}px, ${view.ty}px) scale(${view.scale})`;
   img.classList.toggle("pixelated", view.scale >= 2);
+  renderScale();
   scheduleDraw();
 }
 

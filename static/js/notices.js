@@ -6,10 +6,11 @@ import { formatTime } from "./time.js";
 const MAX_TOASTS = 4;
 const DEFAULT_TIMEOUT_MS = { error: 10000, warn: 8000, ok: 4000, info: 5000 };
 
-// A notice element: <time> · message · ×; onDismiss runs when its × is pressed.
-export function noticeElement({ message, level = "info", at = Date.now() / 1000, onDismiss = null }) {
+// A notice element: <time> · message · ×; onDismiss runs when its × is pressed. kind is
+// "notice" (a toast) or "alert" (the dashboard's strip): same parts, its own classes.
+export function noticeElement({ message, level = "info", at = Date.now() / 1000, onDismiss = null, kind = "notice" }) {
   const el = document.createElement("div");
-  el.className = `notice notice-${level}`;
+  el.className = `${kind} ${kind}-${level}`;
   el.setAttribute("role", level === "error" ? "alert" : "status");
   const when = document.createElement("time");
   when.className = "notice-time";

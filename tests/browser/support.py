@@ -41,6 +41,7 @@ def browser():
 
 DESKTOP = {"width": 1366, "height": 800}
 PHONE = {"width": 390, "height": 844}
+WIDTHS = {"desktop": DESKTOP, "phone": PHONE}
 
 
 @contextlib.contextmanager
@@ -55,11 +56,15 @@ def fresh_page(browser, **context_args):
         context.close()
 
 
-@pytest.fixture(params=[DESKTOP, PHONE], ids=["desktop", "phone"])
+@pytest.fixture(params=list(WIDTHS), ids=list(WIDTHS))
 def sized_page(request, browser):
-    """A page at a desktop and at a phone width (the test runs once for each)."""
-    phone = request.param is PHONE
-    with fresh_page(browser, viewport=request.param, is_mobile=phone, has_touch=phone) as page:
+    """A page at a desktop and at a phone width (the test runs once for each); page.viewport and
+    page.width_name say which."""
+    viewport = WIDTHS[request.param]
+    phone = viewport is PHONE
+    with fresh_page(browser, viewport=viewport, is_mobile=phone, has_touch=phone) as page:
+        page.viewport = viewport
+        page.width_name = request.param
         yield page
 
 

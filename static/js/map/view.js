@@ -60,6 +60,21 @@ export class View {
   }
 }
 
+// A round length (1, 2 or 5 × 10^k metres) that is between minPx and 2.5 × minPx on screen.
+export function scaleBar(view, minPx = 60) {
+  const perPixel = 1 / view.metres(1);
+  const raw = minPx * perPixel;
+  const power = 10 ** Math.floor(Math.log10(raw));
+  const metres = [1, 2, 5, 10].map((k) => k * power).find((m) => m >= raw);
+  return { metres, px: view.metres(metres) };
+}
+
+export function formatMetres(m) {
+  if (m >= 1000) return `${m / 1000} km`;
+  if (m >= 1) return `${m} m`;
+  return `${Math.round(m * 100)} cm`;
+}
+
 export function quaternionToYaw(q) {
   if (!q) return 0;
   const { x = 0, y = 0, z = 0, w = 1 } = q;

@@ -1,0 +1,64 @@
+"""Screenshots of every page at a desktop (1366x800) and a phone (390x844) width, into docs/screenshots/.
+
+Runs the whole product (simulator + server, tests/stack.py) and Debian's Chromium; run it
+after a change to the pages:  .venv/bin/python scripts/screenshots.py
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from tests.stack import PASSWORD, Stack  # noqa: E402
+
+OUT = ROOT / "docs" / "screenshots"
+CHROMIUM = os.environ.get("CHROMIUM_PATH") or shutil.which("chromium") or "/usr/bin/chromium"
+WIDTHS = {"desktop": {"width": 1366, "height": 800}, "phone": {"width": 390, "height": 844}}
+# page name -> (path, what must be on screen before the picture is taken)
+PAGES = {
+    "dashboard": ("/", '[data-field="battery.percent"]:text-matches("%")'),
+    "map": ("/map/", '#map-view[data-ready="1"]'),
+    "drive": ("/drive/", '#camera[data-state="live"]'),
+    "history": ("/history/", "#plot-form"),
+    "activity": ("/activity/", "#activity"),
+    "admin": ("/admin/", "#content"),
+}
+
+
+def main() -> None:
+    from playwright.sync_api import sync_playwright
+
+    OUT.mkdir(parents=True, exist_ok=True)
+    env = {k: v for k, v in os.environ.items() if k not in ("DATABASE_URL", "REDIS_URL")}
+    os.environ.clear()
+    os.environ.update(env)
+    with Stack() as stack, sync_playwright() as p:
+        stack.wait_robot_online()
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--headless=new", "--no-sandbox", "--disable-gpu"])
+        for width_name, viewport in WIDTHS.items():
+            phone = width_name == "phone"
+            context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1)
+            page = context.new_page()
+            page.goto(f"{stack.url}/accounts/login/")
+            page.fill("input[name=username]", "ada")
+            page.fill("input[name=password]", PASSWORD)
+            page.click("button[type=submit]")
+            page.wait_for_url(f"{stack.url}/")
+            for name, (path, ready) in PAGES.items():
+                page.goto(f"{stack.url}{path}")
+                page.wait_for_selector(ready, timeout=20_000)
+                page.wait_for_timeout(1500)  # let live values arrive
+                target = OUT / f"{name}-{width_name}.png"
+                page.screenshot(path=str(target), full_page=False)
+                print(target.relative_to(ROOT))
+            context.close()
+        browser.close()
+
+
+if __name__ == "__main__":
+    main()

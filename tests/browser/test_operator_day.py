@@ -1,0 +1,138 @@
+"""What an operator meets every day, at a desktop and a phone width: alerts that can be
+dismissed and cleared and that expire, one time zone everywhere (labelled), every command
+confirmed, a scale on the map."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+import urllib.request
+from datetime import datetime
+from zoneinfo import ZoneInfo
+
+import pytest
+from django.conf import settings
+from playwright.sync_api import expect
+
+from tests.browser.support import login
+
+pytestmark = pytest.mark.browser
+
+ERROR = 8
+CLOCK = r"\d{2}:\d{2}:\d{2}"
+DATE_TIME = rf"\d{{4}}-\d{{2}}-\d{{2}} {CLOCK}"
+
+
+def robot_logs(stack, node: str, text: str, *, age_s: float = 0.0, level: int = ERROR) -> None:
+    """A robot node writes a line to /rosout (through the simulator)."""
+    stamp = time.time() - age_s
+    msg = {"header": {"stamp": {"secs": int(stamp), "nsecs": int(stamp % 1 * 1e9)}}, "level": level,
+           "name": node, "msg": text, "file": "", "function": "", "line": 0, "topics": []}
+    body = json.dumps({"topic": "/rosout", "msg": msg}).encode()
+    request = urllib.request.Request(f"http://127.0.0.1:{stack.video_port}/sim/publish", data=body, method="POST")
+    with urllib.request.urlopen(request, timeout=5) as res:
+        assert json.load(res)["published"] == 1
+
+
+def test_alerts_have_a_time_a_dismiss_and_stay_cleared(sized_page, stack):
+    page = sized_page
+    node = f"/alerting_{page.width_name}"
+    login(page, stack, "otto")
+    expect(page.locator("#link-pill")).to_have_text("robot online")
+    page.click("#log-clear")  # whatever other tests made the robot log before
+    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)
+    robot_logs(stack, f"{node}_old", "from long ago", age_s=3600)  # older than the alert lifetime
+    robot_logs(stack, node, "laser driver died")
+    alert = page.locator(f'.alert[data-alert="log-{node}"]')
+    expect(alert).to_contain_text(f"ERROR from {node}: laser driver died")
+    expect(alert.locator("time")).to_have_text(re.compile(rf"^{CLOCK}$"))
+    # The robot log shows the line with its date, in the site's zone.
+    line = page.locator(".log-line", has_text=f"{node}: laser driver died").first
+    expect(line).to_have_text(re.compile(rf"^{DATE_TIME} \[ERROR\] {node}: laser driver died$"))
+    # The same source again: one alert that counts, not a pile.
+    robot_logs(stack, node, "laser driver died")
+    expect(alert.locator(".notice-count")).to_have_text("×2")
+    expect(page.locator(f'.alert[data-alert="log-{node}_old"]')).to_have_count(0)
+    for k in range(4):
+        robot_logs(stack, f"{node}_{k}", "also broken")
+    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(3)
+    expect(page.locator(".alerts-more")).to_contain_text("2 more sources report errors")
+
+    newest = page.locator(f'.alert[data-alert="log-{node}_3"]')
+    newest.get_by_role("button", name="Dismiss").click()
+    expect(newest).to_have_count(0)
+    page.reload()
+    # The dismissed one stays away; the others are still there (and one of them still behind "more").
+    expect(page.locator(f'.alert[data-alert="log-{node}_2"]')).to_be_visible()
+    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(3)
+    expect(page.locator(".alerts-more")).to_contain_text("1 more source reports errors")
+    expect(page.locator(f'.alert[data-alert="log-{node}_3"]')).to_have_count(0)
+
+    page.click("#log-clear")
+    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)
+    expect(page.locator(".alerts-more")).to_have_count(0)
+    page.reload()
+    expect(page.locator(".log-line", has_text="laser driver died").first).to_be_visible()  # the log replays…
+    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)  # …but the cleared alerts stay away
+    robot_logs(stack, node, "laser driver died again")
+    expect(alert).to_contain_text("laser driver died again")
+
+
+def test_times_are_in_the_site_zone_and_labelled(sized_page, stack):
+    page = sized_page
+    zone = ZoneInfo(settings.TIME_ZONE)
+    login(page, stack, "olga")
+    # A command, so the Activity page has a row and the card a result line.
+    page.fill("#card-voice textarea[name=text]", "What time is it?")
+    page.click("#card-voice .speech-form button[type=submit]")
+    result = page.locator('#card-voice [data-result="*"], #card-voice [data-result="speech"]').first
+    expect(result).to_have_text(re.compile(rf"^✓ .+ · {CLOCK}$"))
+    page.goto(f"{stack.url}/activity/")
+    abbreviation = datetime.now(zone).strftime("%Z")
+    expect(page.locator("#activity tbody tr").first.locator("time")).to_have_text(
+        re.compile(rf"^{DATE_TIME} {abbreviation}$"))
+    # History: typed dates (not the browser's locale format), read in the site's zone.
+    page.goto(f"{stack.url}/history/")
+    page.select_option("#range", "custom")
+    expect(page.locator("#start")).to_have_attribute("type", "text")
+    expect(page.locator("#start")).to_have_value(re.compile(r"^\d{4}-\d{2}-\d{2} \d{2}:\d{2}$"))
+    expect(page.locator("[data-zone-label]")).to_contain_text(settings.TIME_ZONE)
+    for text in ("2026-01-02 03:04", "2026-07-01 12:00:30"):
+        expected = datetime.fromisoformat(text).replace(tzinfo=zone).timestamp()
+        parsed = page.evaluate("""async (text) => {
+            const src = [...document.scripts].find((s) => s.src.includes('/js/header.js')).src;
+            const { parseSiteTime } = await import(src.replace('header.js', 'time.js'));
+            return parseSiteTime(text);
+        }""", text)
+        assert parsed == expected, text
+
+
+def test_sound_and_dome_commands_confirm_and_the_map_has_a_scale(sized_page, stack):
+    page = sized_page
+    login(page, stack, "otto")
+    for card, command in (("#card-voice", "playback"), ("#card-expression", "dome")):
+        page.click(f'{card} form[data-command="{command}"] button[type=submit]')
+        expect(page.locator(f'{card} [data-result="*"]')).to_have_text(re.compile(rf"^✓ .+ · {CLOCK}$"))
+    page.goto(f"{stack.url}/map/")
+    expect(page.locator("#map-view")).to_have_attribute("data-ready", "1")
+    scale = page.locator("#map-scale")
+    expect(scale).to_be_visible()
+    before = check_scale(page)
+    for _ in range(3):  # 1.4³: more than the 2.5× a bar may grow before it steps to the next round length
+        page.click("#zoom-in")
+    expect(scale).not_to_have_attribute("data-metres", f"{before:g}")
+    check_scale(page)
+
+
+def check_scale(page) -> float:
+    """The scale bar's label is a round length and its bar is as long on screen as that much map."""
+    scale = page.locator("#map-scale")
+    metres = float(scale.get_attribute("data-metres"))
+    label = scale.locator(".map-scale-label").inner_text()
+    assert label == (f"{metres:g} m" if metres >= 1 else f"{round(metres * 100)} cm")
+    bar = scale.locator(".map-scale-bar").bounding_box()["width"]
+    ends = [page.evaluate("([x, y]) => window.cyborgMap.toClient(x, y)", p) for p in ([0, 0], [metres, 0])]
+    assert bar == pytest.approx(math.dist(*ends), abs=1.5)
+    return metres

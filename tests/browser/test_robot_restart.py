@@ -1,0 +1,81 @@
+"""The robot goes away and comes back (the simulator process is stopped and started again)
+while the Drive page and the dashboard are open, at a desktop and a phone width."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.browser.support import PHONE, WIDTHS, login
+
+pytestmark = pytest.mark.browser
+
+
+def test_a_robot_restart_greys_the_camera_disables_driving_and_leaves_no_stale_state(browser, stack):
+    contexts, drives, dashboards = [], [], []
+    try:
+        for viewport in WIDTHS.values():
+            phone = viewport is PHONE
+            context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone)
+            contexts.append(context)
+            drive = context.new_page()
+            login(drive, stack, "otto", next_path="/drive/")
+            dashboard = context.new_page()
+            dashboard.goto(f"{stack.url}/")
+            drives.append(drive)
+            dashboards.append(dashboard)
+        for drive in drives:
+            expect(drive.locator("#camera")).to_have_attribute("data-state", "live", timeout=15_000)
+            expect(drive.locator("#camera-age")).to_have_text(re.compile(r"^frame \d+\.\d s old$"))
+            expect(drive.locator("#lock-acquire")).to_be_visible()
+            expect(drive.locator("#drive-offline")).to_be_hidden()
+
+        stack.stop_sim()
+        try:
+            for drive in drives:
+                # Driving is off at once; the picture greys out 2 s after its last frame.
+                expect(drive.locator("#drive-offline")).to_be_visible(timeout=10_000)
+                expect(drive.locator("#lock-acquire")).to_be_hidden()
+                expect(drive.locator("#camera")).to_have_attribute("data-state", "stale", timeout=10_000)
+                expect(drive.locator("#camera-placeholder")).to_be_visible()
+                expect(drive.locator("#camera-placeholder")).to_contain_text("Camera unavailable")
+                expect(drive.locator("#camera-age")).to_contain_text(re.compile("last frame|no frame"))
+            desk = drives[0]
+            desk.locator("#drive h2").click()
+            desk.keyboard.down("w")
+            desk.wait_for_timeout(300)
+            desk.keyboard.up("w")
+            expect(desk.locator("#lock-state")).not_to_have_text("You are driving")
+            expect(desk.locator("#cmd-vel")).to_have_attribute("data-linear", "0")
+            # A command while the robot is away fails, and says so.
+            dashboard = dashboards[0]
+            dashboard.click('#card-mode [data-mode="stop"]')
+            expect(dashboard.locator('#card-mode [data-field="mode.request"]')).to_contain_text("failed")
+        finally:
+            stack.start_sim()
+            stack.wait_robot_online()
+
+        for drive in drives:
+            expect(drive.locator("#drive-offline")).to_be_hidden(timeout=15_000)
+            expect(drive.locator("#lock-acquire")).to_be_visible()
+            expect(drive.locator("#camera")).to_have_attribute("data-state", "live", timeout=20_000)
+            expect(drive.locator("#camera-placeholder")).to_be_hidden()
+        for dashboard in dashboards:
+            # The failure from before the restart is gone, and the headline agrees with "Active".
+            expect(dashboard.locator('#card-mode [data-field="mode.request"]')).to_have_text("—", timeout=10_000)
+            active = dashboard.locator('[data-field="smach.active"]')
+            expect(active).not_to_have_text("—", timeout=10_000)
+            dashboard.wait_for_function("""() => {
+                const chain = document.querySelector('[data-field="smach.active"]').textContent.split(' › ');
+                return document.querySelector('[data-field="smach.current"]').textContent === chain[chain.length - 1];
+            }""")
+            expect(dashboard.locator('.alert[data-alert="offline"]')).to_have_count(0)
+        # Leave the shared robot where the other tests expect it: out of startup, in suspension.
+        dashboards[0].click('#card-mode [data-mode="stop"]')
+        for dashboard in dashboards:
+            expect(dashboard.locator('[data-field="smach.current"]')).to_have_text("suspension", timeout=25_000)
+    finally:
+        for context in contexts:
+            context.close()
