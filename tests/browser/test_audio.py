@@ -5,6 +5,7 @@ analyser, and viewers find both disabled."""
 from __future__ import annotations
 
 import base64
+import re
 import threading
 import wave
 
@@ -123,3 +124,16 @@ def test_viewers_find_talk_and_listen_disabled_with_the_reason(page, stack):
     expect(page.locator("#audio-listen")).to_be_disabled()
     expect(page.locator("#audio-talk")).to_be_disabled()
     expect(page.locator("#audio-problem")).to_contain_text("may not listen or talk")
+
+
+def test_a_browser_without_a_usable_microphone_says_why(page, stack):
+    """Headless Chromium without fake devices has no microphone it may use: holding Talk
+    explains that instead of failing silently, and nothing reaches the robot."""
+    login(page, stack, "olga", next_path="/drive/")
+    talk = page.locator("#audio-talk")
+    expect(talk).to_be_enabled()
+    talk.hover()
+    page.mouse.down()
+    expect(page.locator("#audio-problem")).to_contain_text(re.compile("permission denied|No microphone found"))
+    page.mouse.up()
+    expect(page.locator("#audio-talker")).to_have_text("Nobody is talking")

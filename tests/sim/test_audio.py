@@ -5,10 +5,11 @@ from __future__ import annotations
 import base64
 import time
 
+import pytest
 import roslibpy
 
 from robot import interface as ri
-from robot.sim.audio import dominant_hz, tone
+from robot.sim.audio import Heard, Speaker, dominant_hz, tone
 from tests.helpers import wait_until
 from tests.sim.support import Inbox
 
@@ -49,4 +50,13 @@ def test_the_speakers_keep_what_arrives_for_measuring(sim, ros):
     assert heard.info == ri.speaker_info()
     assert abs(heard.duration_s() - 0.5) < 1e-9
     assert abs(heard.dominant_hz() - 1000) < 5
-    assert heard.gap_s(buffer_s=0.1) < 0.1
+
+
+def test_gaps_are_the_silence_a_player_with_a_buffer_would_leave():
+    speaker = Speaker()
+    chunk = bytes(640)  # 20 ms
+    # on time, on time, 50 ms late (30 ms after the buffered audio ran out), then on time again
+    for t in (0.0, 0.02, 0.11, 0.13):
+        speaker.chunks.append(Heard(100 + t, chunk))
+    assert speaker.gap_s(buffer_s=0.04) == pytest.approx(0.03)
+    assert speaker.gap_s(buffer_s=0.1) == 0.0
