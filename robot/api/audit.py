@@ -9,7 +9,7 @@ from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import generics, serializers
 from rest_framework.pagination import PageNumberPagination
 
-from robot.api.common import API_AUTHENTICATION
+from robot.api.base import API_AUTHENTICATION
 from robot.commands.selectors import audit_entries
 from robot.models import AuditEntry
 

@@ -1,28 +1,9 @@
-"""Pieces every API view of the commanding endpoints shares: auth order, throttle, error docs."""
+"""The error shape every robot API view documents in the OpenAPI schema."""
 
 from __future__ import annotations
 
-from django.conf import settings
 from drf_spectacular.utils import OpenApiResponse, inline_serializer
 from rest_framework import serializers
-from rest_framework.authentication import SessionAuthentication, TokenAuthentication
-from rest_framework.throttling import ScopedRateThrottle
-
-# Token first: an anonymous caller gets 401 with ``WWW-Authenticate: Token`` (not a bare 403).
-API_AUTHENTICATION = [TokenAuthentication, SessionAuthentication]
-
-
-class CommandThrottle(ScopedRateThrottle):
-    """Per-user rate limit on commands (``COMMAND_THROTTLE_RATE``), read at request time."""
-
-    def get_rate(self) -> str | None:
-        return settings.COMMAND_THROTTLE_RATE
-
-
-def source_of(request) -> str:
-    """Audit source: the pages post with the session; scripts authenticate with a token."""
-    return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
-
 
 ErrorOut = inline_serializer(
     name="Error",

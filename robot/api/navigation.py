@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema
 from rest_framework import permissions, status, viewsets
-from rest_framework.authentication import SessionAuthentication
-from rest_framework.decorators import action, api_view
+from rest_framework.decorators import action
 from rest_framework.request import Request
 from rest_framework.response import Response
 
 from cyborg_site.roles import is_operator
+from robot.api.base import API_AUTHENTICATION, CommandThrottle, robot_api_view, run
 from robot.api.common import error_responses
 from robot.api.serializers_navigation import (
     Goal,
@@ -22,19 +21,14 @@ from robot.api.serializers_navigation import (
 )
 from robot.api.validation import body_object
 from robot.models import Location
-from robot.navigation.goals import agoal_cancel, agoal_send, ainitial_pose_set
-from robot.navigation.locations import alocation_go
+from robot.navigation.goals import goal_cancel, goal_send, initial_pose_set
+from robot.navigation.locations import location_go
 from robot.navigation.selectors import map_meta, navigation_status
-
-
-def _source(request: Request) -> str:
-    # The map page posts with its session; scripts use tokens.
-    return "page" if isinstance(request.successful_authenticator, SessionAuthentication) else "api"
 
 
 @extend_schema(responses={200: MapMeta, **error_responses(404)},
                summary="The latest map's metadata and versioned image URL")
-@api_view(["GET"])
+@robot_api_view(["GET"])
 def map_view(request: Request) -> Response:
     meta = map_meta()
     if meta is None:
@@ -47,20 +41,23 @@ def map_view(request: Request) -> Response:
                summary="Send a navigation goal (move_base)",
                description="x and y in metres on the latest map (refused off the map, on obstacles or in "
                            "unexplored space), yaw in radians within (-2π, 2π]; other fields are refused.")
-@api_view(["POST"])
+@robot_api_view(["POST"], commands=True)
 def goal_view(request: Request) -> Response:
-    return Response(async_to_sync(agoal_send)(user=request.user, source=_source(request), data=body_object(request)))
+    command = goal_send(user=request.user, data=body_object(request))
+    run(request, command)
+    return Response(command.result)
 
 
 @extend_schema(request=None, responses={200: NavigationStatus, **error_responses(503, 504)},
                summary="Cancel the current goal")
-@api_view(["POST"])
+@robot_api_view(["POST"], commands=True)
 def cancel_view(request: Request) -> Response:
-    return Response(async_to_sync(agoal_cancel)(user=request.user, source=_source(request)))
+    command = goal_cancel()
+    return Response({"detail": run(request, command), **command.result})
 
 
 @extend_schema(responses={200: NavigationStatus}, summary="The current goal, its status, and the robot's pose")
-@api_view(["GET"])
+@robot_api_view(["GET"])
 def status_view(request: Request) -> Response:
     return Response(navigation_status())
 
@@ -69,10 +66,10 @@ def status_view(request: Request) -> Response:
                summary="Set the robot's initial pose",
                description="x and y in metres on the latest map (unexplored space allowed, obstacles not), yaw in "
                            "radians within (-2π, 2π]; other fields are refused.")
-@api_view(["POST"])
+@robot_api_view(["POST"], commands=True)
 def initial_pose_view(request: Request) -> Response:
-    body = async_to_sync(ainitial_pose_set)(user=request.user, source=_source(request), data=body_object(request))
-    return Response(body)
+    command = initial_pose_set(data=body_object(request))
+    return Response({"detail": run(request, command), "pose": command.result})
 
 
 class OperatorWrites(permissions.BasePermission):
@@ -90,10 +87,14 @@ class LocationViewSet(viewsets.ModelViewSet):
     lookup_field = "name"
     lookup_value_regex = r"[A-Za-z0-9_\-]+"
     permission_classes = [permissions.IsAuthenticated, OperatorWrites]
+    authentication_classes = API_AUTHENTICATION
 
     @extend_schema(request=None, responses={200: Goal, **error_responses(409, 503, 504)},
                    summary="Send the robot to this location")
-    @action(detail=True, methods=["post"], permission_classes=[permissions.IsAuthenticated])
+    @action(detail=True, methods=["post"], permission_classes=[permissions.IsAuthenticated],
+            throttle_classes=[CommandThrottle])
     def go(self, request: Request, name: str) -> Response:
         # The command pipeline checks the role (and audits refusals), so no permission class here.
-        return Response(async_to_sync(alocation_go)(user=request.user, source=_source(request), name=name))
+        command = location_go(user=request.user, name=name)
+        run(request, command)
+        return Response(command.result)

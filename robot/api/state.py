@@ -6,9 +6,9 @@ from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema, inline_serializer
 from rest_framework import serializers
 from rest_framework.response import Response
-from rest_framework.views import APIView
 
-from robot.api.common import API_AUTHENTICATION, error_responses
+from robot.api.base import RobotAPIView
+from robot.api.common import error_responses
 from robot.commands.selectors import arobot_state
 
 _Value = inline_serializer("TopicValue", {
@@ -18,8 +18,7 @@ _Value = inline_serializer("TopicValue", {
 })
 
 
-class RobotStateView(APIView):
-    authentication_classes = API_AUTHENTICATION
+class RobotStateView(RobotAPIView):
 
     @extend_schema(
         summary="Robot state",

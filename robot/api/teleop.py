@@ -6,9 +6,9 @@ from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema
 from rest_framework import serializers
 from rest_framework.response import Response
-from rest_framework.views import APIView
 
-from robot.api.common import error_responses, source_of
+from robot.api.base import RobotAPIView, source_of
+from robot.api.common import error_responses
 from robot.teleop.estop import STEPS, estop_release, estop_run
 from robot.teleop.latch import alatch
 
@@ -42,7 +42,7 @@ class ReleaseInputSerializer(serializers.Serializer):
     confirm = serializers.BooleanField(help_text="Must be true: releasing lets the robot be driven again.")
 
 
-class EstopView(APIView):
+class EstopView(RobotAPIView):  # never throttled: a stop always goes through
 
     @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
     def get(self, request):
@@ -66,7 +66,7 @@ class EstopView(APIView):
         return Response(body, status=200 if report.ok else 502)
 
 
-class EstopReleaseView(APIView):
+class EstopReleaseView(RobotAPIView):
 
     @extend_schema(
         request=ReleaseInputSerializer,

@@ -7,7 +7,7 @@ from rest_framework.routers import SimpleRouter
 from robot.api import commands, navigation
 from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
-from robot.api.common import API_AUTHENTICATION
+from robot.api.base import API_AUTHENTICATION
 from robot.api.state import RobotStateView
 from robot.api.teleop import EstopReleaseView, EstopView
 

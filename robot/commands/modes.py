@@ -32,7 +32,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.commands import moderoute
-from robot.commands.pipeline import Busy, arun_command
+from robot.commands.pipeline import Busy, Command, arun
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
 from robot.link import bus
@@ -167,11 +167,10 @@ async def perform_mode(mode: ri.Mode, *, requested_by: str = "") -> str:
     return outcome
 
 
-async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
-    """The full command: role check, validation, serialisation, audit."""
+def change_mode(mode: ri.Mode | Any, *, user: Any) -> Command:
+    """The full command: validation, serialisation (role check and audit by the pipeline)."""
 
-    async def run() -> str:
-        chosen = clean_mode(mode)
+    async def send(chosen: ri.Mode) -> str:
         if chosen is not ri.Mode.STOP:
             await ensure_released()
         async with serialised(chosen):
@@ -179,7 +178,11 @@ async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
             return await perform_mode(chosen, requested_by=by)
 
     params = {"mode": mode.short if isinstance(mode, ri.Mode) else mode}
-    return await arun_command(user=user, source=source, action="mode", params=params, run=run)
+    return Command("mode", params, send, check=lambda: clean_mode(mode))
+
+
+async def achange_mode(*, user: Any, source: str, mode: ri.Mode | Any) -> str:
+    return await arun(change_mode(mode, user=user), user=user, source=source)
 
 
 # --- requested mode, visible to every open page ------------------------------------------

@@ -5,15 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 from robot import interface as ri
-from robot.commands.pipeline import arun_command
+from robot.commands.pipeline import Command
 from robot.commands.validation import clean_bool
 from robot.link import bus
 from robot.teleop.latch import ensure_released
 
 
-async def aset_motors(*, user: Any, source: str, enabled: Any) -> str:
-    async def run() -> str:
-        on = clean_bool(enabled, "enabled")
+def set_motors(enabled: Any) -> Command:
+    async def send(on: bool) -> str:
         if on:
             await ensure_released()
         key = "enable_motors" if on else "disable_motors"
@@ -25,4 +24,4 @@ async def aset_motors(*, user: Any, source: str, enabled: Any) -> str:
             raise
         return f"Motors {'enabled' if on else 'disabled'} ({ri.service(key).name} ok)"
 
-    return await arun_command(user=user, source=source, action="motors", params={"enabled": enabled}, run=run)
+    return Command("motors", {"enabled": enabled}, send, check=lambda: clean_bool(enabled, "enabled"))

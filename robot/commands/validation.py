@@ -9,8 +9,6 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from asgiref.sync import sync_to_async
-
 from cyborg_site.text import EMPTY, TextRejected, clean_text
 from robot import interface as ri
 from robot.commands.pipeline import InvalidCommand
@@ -57,23 +55,21 @@ def clean_mode(value: Any) -> ri.Mode:
         raise InvalidCommand(f"mode: one of {', '.join(MODE_NAMES)}.", field="mode") from None
 
 
-async def _preset(model: type, value: Any, field: str, what: str) -> str:
+def _preset(model: type, value: Any, field: str, what: str) -> str:
     name = _text(value, field, limit=NAME_MAX)
-    # Thread-sensitive like the audit write: runs where the caller's request owns its connection.
-    exists = await sync_to_async(model.objects.filter(name=name).exists, thread_sensitive=True)() if name else False
-    if not exists:
-        names = await sync_to_async(lambda: list(model.objects.values_list("name", flat=True)), thread_sensitive=True)()
+    if not name or not model.objects.filter(name=name).exists():
+        names = list(model.objects.values_list("name", flat=True))
         raise InvalidCommand(f"{field}: unknown {what} {name!r}; known: {', '.join(names) or 'none'}.", field=field)
     return name
 
 
-async def clean_emotion(value: Any) -> str:
-    return await _preset(EmotionPreset, value, "emotion", "emotion")
+def clean_emotion(value: Any) -> str:
+    return _preset(EmotionPreset, value, "emotion", "emotion")
 
 
-async def clean_clip(value: Any) -> str:
-    return await _preset(SoundClip, value, "clip", "sound clip")
+def clean_clip(value: Any) -> str:
+    return _preset(SoundClip, value, "clip", "sound clip")
 
 
-async def clean_dome_mode(value: Any) -> str:
-    return await _preset(DomeMode, value, "mode", "dome mode")
+def clean_dome_mode(value: Any) -> str:
+    return _preset(DomeMode, value, "mode", "dome mode")

@@ -13,7 +13,7 @@ import uuid
 from typing import Any
 
 from robot import interface as ri
-from robot.commands.pipeline import arun_command
+from robot.commands.pipeline import Command, arun
 from robot.link.bus import apublish, arequest
 from robot.live.announce import aget_state, apublish_state
 from robot.live.groups import GOAL_KEY
@@ -83,27 +83,42 @@ async def asend_pose_goal(*, user: Any, x: float, y: float, yaw: float, location
                              user=user, x=x, y=y, yaw=yaw, location=location)
 
 
-async def agoal_send(*, user: Any, source: str, data: dict[str, Any]) -> dict[str, Any]:
-    """Validate {x, y, yaw} against the map and send it to move_base; returns the goal with its status."""
-    sent: dict[str, Any] = {}
+def _pose(data: dict[str, Any]) -> tuple[float, float, float]:
+    only_fields(data, POSE_FIELDS)
+    return number(data.get("x"), "x"), number(data.get("y"), "y"), clean_yaw(data.get("yaw"))
 
-    async def run() -> str:
-        only_fields(data, POSE_FIELDS)
-        x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
-        yaw = clean_yaw(data.get("yaw"))
+
+def goal_send(*, user: Any, data: dict[str, Any]) -> Command:
+    """Validate {x, y, yaw} against the map and send it to move_base; ``result`` is the goal with its status."""
+
+    async def send(pose: tuple[float, float, float]) -> str:
+        x, y, yaw = pose
         await ensure_released()
-        sent.update(await asend_pose_goal(user=user, x=x, y=y, yaw=yaw))
+        sent = await asend_pose_goal(user=user, x=x, y=y, yaw=yaw)
+        command.result.update(goal_view(sent, None) or {})
         return f"goal {sent['id']} sent to ({x:.2f}, {y:.2f}) facing {math.degrees(sent['yaw']):.0f}°"
 
     params = audit_params(**{k: data.get(k) for k in ("x", "y", "yaw")})
-    await arun_command(user=user, source=source, action="navigation.goal", params=params, run=run)
-    return goal_view(sent, None) or {}
+    command = Command("navigation.goal", params, send, check=lambda: _pose(data))
+    return command
 
 
-async def agoal_cancel(*, user: Any, source: str) -> dict[str, Any]:
-    """Cancel the current goal; with none under way, cancel every move_base goal (stop navigating)."""
+async def agoal_send(*, user: Any, source: str, data: dict[str, Any]) -> dict[str, Any]:
+    command = goal_send(user=user, data=data)
+    await arun(command, user=user, source=source)
+    return command.result
 
-    async def run() -> str:
+
+def goal_cancel() -> Command:
+    """Cancel the current goal; with none under way, cancel every move_base goal (stop navigating).
+    ``result`` is the navigation status afterwards."""
+
+    async def send(_: None) -> str:
+        outcome = await _cancel()
+        command.result.update(await anavigation_status())
+        return outcome
+
+    async def _cancel() -> str:
         status = await anavigation_status()
         goal = status["goal"]
         if goal and goal["status"] not in TERMINAL_STATES:
@@ -115,24 +130,35 @@ async def agoal_cancel(*, user: Any, source: str) -> dict[str, Any]:
         await apublish_action("move_base", "cancel", cancel_message())
         return "no goal of ours under way: cancelled every move_base goal"
 
-    outcome = await arun_command(user=user, source=source, action="navigation.cancel", params={}, run=run)
-    return {"detail": outcome, **(await anavigation_status())}
+    command = Command("navigation.cancel", {}, send)
+    return command
 
 
-async def ainitial_pose_set(*, user: Any, source: str, data: dict[str, Any]) -> dict[str, Any]:
-    """Publish /initialpose (the robot re-localises there); unexplored cells are allowed, obstacles not."""
-    pose_sent: dict[str, float] = {}
+async def agoal_cancel(*, user: Any, source: str) -> dict[str, Any]:
+    command = goal_cancel()
+    outcome = await arun(command, user=user, source=source)
+    return {"detail": outcome, **command.result}
 
-    async def run() -> str:
-        only_fields(data, POSE_FIELDS)
-        x, y = number(data.get("x"), "x"), number(data.get("y"), "y")
-        heading = normalize_angle(clean_yaw(data.get("yaw")))
+
+def initial_pose_set(*, data: dict[str, Any]) -> Command:
+    """Publish /initialpose (the robot re-localises there); unexplored cells are allowed, obstacles not.
+    ``result`` is the pose sent."""
+
+    async def send(pose: tuple[float, float, float]) -> str:
+        x, y, yaw = pose
+        heading = normalize_angle(yaw)
         await ensure_released()
         await acheck_position(x, y, allow_unknown=True)
         await apublish("initialpose", initial_pose_message(x, y, heading))
-        pose_sent.update(x=x, y=y, yaw=heading)
+        command.result.update(x=x, y=y, yaw=heading)
         return f"initial pose set to ({x:.2f}, {y:.2f}) facing {math.degrees(heading):.0f}°"
 
     params = audit_params(**{k: data.get(k) for k in ("x", "y", "yaw")})
-    outcome = await arun_command(user=user, source=source, action="navigation.initial_pose", params=params, run=run)
-    return {"detail": outcome, "pose": pose_sent}
+    command = Command("navigation.initial_pose", params, send, check=lambda: _pose(data))
+    return command
+
+
+async def ainitial_pose_set(*, user: Any, source: str, data: dict[str, Any]) -> dict[str, Any]:
+    command = initial_pose_set(data=data)
+    outcome = await arun(command, user=user, source=source)
+    return {"detail": outcome, "pose": command.result}

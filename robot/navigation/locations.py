@@ -4,10 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from channels.db import database_sync_to_async
 from django.conf import settings
 
-from robot.commands.pipeline import InvalidCommand, arun_command
+from robot.commands.pipeline import Command, InvalidCommand, arun
 from robot.link.bus import RobotError
 from robot.live.announce import aget_state
 from robot.models import Location
@@ -29,16 +28,26 @@ async def acurrent_pose() -> dict[str, float]:
     return pose
 
 
-async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
+def _location(name: str) -> Location:
+    location = Location.objects.filter(name=name).first()
+    if location is None:
+        raise LocationNotFound(f"No location named {name!r}")
+    return location
+
+
+def location_go(*, user: Any, name: str) -> Command:
     """Send the robot to a named location: a move_base goal at its pose, or by name to the
-    robot's own navigation action when ``NAVIGATION_BACKEND`` is ``cyborg_navigation``."""
+    robot's own navigation action when ``NAVIGATION_BACKEND`` is ``cyborg_navigation``.
+    ``result`` is the goal with its status."""
     sent: dict[str, Any] = {}
 
-    async def run() -> str:
+    async def send(location: Location) -> str:
+        outcome = await _go(location)
+        command.result.update(goal_view(sent, None) or {})
+        return outcome
+
+    async def _go(location: Location) -> str:
         await ensure_released()
-        location = await database_sync_to_async(Location.objects.filter(name=name).first)()
-        if location is None:
-            raise LocationNotFound(f"No location named {name!r}")
         if settings.NAVIGATION_BACKEND == "cyborg_navigation":
             goal_id = new_goal_id()
             sent.update(await astart_goal(
@@ -49,5 +58,11 @@ async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
                                           location=location.name))
         return f"goal {sent['id']} sent to {location.name} ({location.x:.2f}, {location.y:.2f})"
 
-    await arun_command(user=user, source=source, action="navigation.go_to", params={"location": name}, run=run)
-    return goal_view(sent, None) or {}
+    command = Command("navigation.go_to", {"location": name}, send, check=lambda: _location(name))
+    return command
+
+
+async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
+    command = location_go(user=user, name=name)
+    await arun(command, user=user, source=source)
+    return command.result
