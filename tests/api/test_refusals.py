@@ -84,7 +84,7 @@ def test_it_answers_503_when_offline_and_fires_nothing_later(operator_api, sim, 
 
 
 # Two requests on two threads: each needs the committed users and presets.
-@pytest.mark.django_db(transaction=True, serialized_rollback=True)
+@pytest.mark.django_db(transaction=True)
 def test_it_refuses_a_second_mode_change_while_one_runs(operator, robot):
     import threading
 

@@ -53,7 +53,7 @@ async def test_it_lets_the_redis_lock_expire_if_its_holder_dies(settings):
         await client.aclose()
 
 
-@pytest.mark.django_db(transaction=True, serialized_rollback=True)
+@pytest.mark.django_db(transaction=True)
 async def test_it_shows_every_watcher_the_requested_mode(link, sim, operator, viewer):
     wait_ready(sim)
     await until_the_server_hears(lambda s: s == "suspension", "suspension")
