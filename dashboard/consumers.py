@@ -9,10 +9,11 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator
 from dashboard.fastdispatch import NoDatabaseHopMixin
-from dashboard.live import live_frame, status_frame
 from robot import interface as ri
 from robot.link.bus import RobotError, arequest
-from robot.live.groups import STATUS_GROUP, STATUS_KEY, topic_group
+from robot.live.feed import keeps_every_message, local_hub
+from robot.live.frames import status_text, update_fragment
+from robot.live.groups import STATUS_KEY
 from robot.live.keys import SERVER_KEYS, watchable_keys
 from robot.live.state import get_store
 
@@ -20,24 +21,29 @@ UNAUTHENTICATED = 4401
 
 
 class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
-    db_free_types = frozenset({"robot.update", "robot.status"})
+    """Thin: topic updates and link status come from this process's hub (robot.live.hub), never
+    through the channel layer, and nothing here touches the database but the reconnect check."""
+
+    channel_layer_alias = "none"  # not configured: this consumer gets no per-socket channel
+    db_free_types = frozenset({"websocket.connect", "websocket.receive", "websocket.disconnect"})
 
     async def connect(self) -> None:
         user = self.scope.get("user")
         if user is None or not user.is_authenticated:
             await self.close(code=UNAUTHENTICATED)
             return
-        self.watching: set[str] = set()
-        self.can_command = await database_sync_to_async(is_operator)(user)
-        await self.channel_layer.group_add(STATUS_GROUP, self.channel_name)
         await self.accept()
         status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
-        await self.send_json(status_frame(status))
+        await self.send(text_data=status_text(status))
+        self.hub = local_hub()
+        self.socket = self.hub.attach(self._send_text)
+
+    async def _send_text(self, text: str) -> None:
+        await self.base_send({"type": "websocket.send", "text": text})
 
     async def disconnect(self, code: int) -> None:
-        for key in getattr(self, "watching", ()):
-            await self.channel_layer.group_discard(topic_group(key), self.channel_name)
-        await self.channel_layer.group_discard(STATUS_GROUP, self.channel_name)
+        if hasattr(self, "socket"):
+            self.hub.detach(self.socket)
 
     async def receive_json(self, content: Any, **kwargs: Any) -> None:
         action = content.get("action") if isinstance(content, dict) else None
@@ -56,10 +62,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         unknown = [k for k in keys if k not in allowed]
         if unknown:
             await self.send_json({"kind": "error", "message": f"Cannot watch: {', '.join(unknown)}"})
-        new = [k for k in keys if k in allowed and k not in self.watching]
-        for key in new:
-            await self.channel_layer.group_add(topic_group(key), self.channel_name)
-            self.watching.add(key)
+        new = [k for k in dict.fromkeys(keys) if k in allowed and k not in self.socket.keys]
         for key in new:
             if key in SERVER_KEYS:  # written by the server itself: no ROS topic to subscribe
                 continue
@@ -69,17 +72,33 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
                     await arequest("subscribe", topic=topic.name, msg_type=topic.type, timeout=2)
                 except RobotError as exc:
                     await self.send_json({"kind": "error", "message": exc.message})
-        store = get_store()
-        recent = {k for k in new if k not in SERVER_KEYS and ri.topic(k).recent}
-        latest = await store.aget_many([k for k in new if k not in recent])
-        for key in new:
-            entries = await store.aget_recent(key) if key in recent else [latest.get(key)]
-            for entry in entries:
-                if entry:
-                    await self.send_json(live_frame(entry))
+        await self._snapshot(new)
+
+    async def _snapshot(self, keys: list[str]) -> None:
+        """Watch ``keys`` and queue their stored values, never older than a live update already queued."""
+        socket = self.socket
+        socket.tracking = {}
+        self.hub.watch(socket, keys)
+        try:
+            store = get_store()
+            recent = {k for k in keys if k not in SERVER_KEYS and ri.topic(k).recent}
+            latest = await store.aget_many([k for k in keys if k not in recent])
+            for key in keys:
+                every = keeps_every_message(key)
+                entries = await store.aget_recent(key) if key in recent else [latest.get(key)]
+                live = socket.tracking.get(key)
+                for entry in entries:
+                    if not entry:
+                        continue
+                    t = float(entry["t"])
+                    if live and (t >= min(live) if every else t <= max(live)):
+                        continue  # this one (or a newer value) is already on its way
+                    self.hub.offer(socket, key, update_fragment(entry), t, every=every)
+        finally:
+            socket.tracking = None
 
     async def _reconnect(self) -> None:
-        if not self.can_command:
+        if not await database_sync_to_async(is_operator)(self.scope["user"]):
             await self.send_json({"kind": "error", "message": "Only operators can reconnect the robot link."})
             return
         try:
@@ -87,9 +106,3 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             await self.send_json({"kind": "notice", "message": "Reconnecting to the robot…"})
         except RobotError as exc:
             await self.send_json({"kind": "error", "message": exc.message})
-
-    async def robot_update(self, event: dict[str, Any]) -> None:
-        await self.send_json(live_frame(event))
-
-    async def robot_status(self, event: dict[str, Any]) -> None:
-        await self.send_json(status_frame(event))

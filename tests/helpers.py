@@ -39,9 +39,20 @@ async def receive_until(communicator, predicate: Callable[[dict], bool], *, time
         remaining = deadline - time.monotonic()
         if remaining <= 0:
             raise AssertionError("no matching websocket frame arrived in time")
-        frame = await communicator.receive_json_from(timeout=remaining)
+        frame = await receive_frame(communicator, timeout=remaining)
         if predicate(frame):
             return frame
+
+
+async def receive_frame(communicator, *, timeout: float = 5.0) -> dict:
+    """The next frame, with each update of a batched frame (``kind: updates``) as a frame of its own."""
+    queued: list[dict] = communicator.__dict__.setdefault("_unbatched", [])
+    if not queued:
+        frame = await communicator.receive_json_from(timeout=timeout)
+        if frame.get("kind") != "updates":
+            return frame
+        queued.extend({"kind": "update", **update} for update in frame["updates"])
+    return queued.pop(0)
 
 
 def ws_communicator(user, path: str = "/ws/live/"):

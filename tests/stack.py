@@ -45,9 +45,11 @@ def wait_for_port(port: int, timeout: float = 20.0, proc: subprocess.Popen | Non
 
 class Stack:
     def __init__(self, *, sim: bool = True, sim_args: tuple[str, ...] = (), env: dict[str, str] | None = None,
-                 users: bool = True, redis_url: str | None = None) -> None:
+                 users: bool = True, redis_url: str | None = None, webs: int = 1) -> None:
         self.tmp = Path(tempfile.mkdtemp(prefix="cyborg-stack-"))
-        self.web_port = free_port()
+        # Scaled (redis_url), several web processes may share the one link.
+        self.web_ports = [free_port() for _ in range(webs)]
+        self.web_port = self.web_ports[0]
         self.sim_port = free_port()
         self.video_port = free_port()
         self.with_sim = sim
@@ -111,9 +113,14 @@ class Stack:
         return self.link_proc
 
     def start_web(self) -> subprocess.Popen:
-        self.web = self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(self.web_port),
-                                "cyborg_site.asgi:application"], "web")
-        wait_for_port(self.web_port, proc=self.web)
+        self.webs = [
+            self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port), "cyborg_site.asgi:application"],
+                        "web" if i == 0 else f"web{i}")
+            for i, port in enumerate(self.web_ports)
+        ]
+        for port, proc in zip(self.web_ports, self.webs, strict=True):
+            wait_for_port(port, proc=proc)
+        self.web = self.webs[0]
         return self.web
 
     def wait_robot_online(self, timeout: float = 20.0) -> None:

@@ -21,13 +21,12 @@ import roslibpy
 from robot import interface as ri
 from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos
-from robot.live.announce import aannounce
+from robot.live.announce import aannounce, aannounce_status
 from robot.live.fanout import Coalescer
 from robot.live.groups import (
     LATCH_KEY,
     LINK_CHANNEL,
     REPLY_LIST_PREFIX,
-    STATUS_GROUP,
     STATUS_KEY,
     LinkReply,
     LinkRequest,
@@ -218,7 +217,7 @@ class RobotLink:
 
     async def _send_update(self, update: TopicUpdate) -> None:
         key = update["key"]
-        await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store, layer=self.layer)
+        await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store)
 
     # --- connection status -----------------------------------------------------------
 
@@ -248,7 +247,7 @@ class RobotLink:
     async def _publish_status(self) -> None:
         status = self.status()
         try:
-            await aannounce(STATUS_KEY, dict(status), group=STATUS_GROUP, store=self.store, layer=self.layer)
+            await aannounce_status(dict(status), store=self.store)
         except Exception:
             log.exception("could not publish link status")
 

@@ -1,6 +1,6 @@
 """Store a value as the latest state of its key, then tell every page watching that key.
 
-The one place that does "store it, then tell the group": the link for every robot message
+The one place that does "store it, then tell the watching pages": the link for every robot message
 and its connection status, the server for the values it writes itself (the requested mode,
 the map's metadata, goals), and a send without storing for values that are never kept.
 """
@@ -10,9 +10,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from channels.layers import BaseChannelLayer, get_channel_layer
-
-from robot.live.groups import SharedMessage, TopicUpdate, topic_group
+from robot.live import feed
+from robot.live.groups import STATUS_KEY, TopicUpdate
 from robot.live.state import StateStore, get_store
 
 
@@ -22,26 +21,22 @@ def server_update(key: str, msg: dict[str, Any], t: float | None = None) -> Topi
 
 
 async def aannounce(
-    key: str,
-    event: dict[str, Any],
-    *,
-    group: str | None = None,
-    keep: bool = True,
-    recent: int = 0,
-    store: StateStore | None = None,
-    layer: BaseChannelLayer | None = None,
+    key: str, event: dict[str, Any], *, keep: bool = True, recent: int = 0, store: StateStore | None = None,
 ) -> None:
     """Store ``event`` as the latest value of ``key`` (and in its recent ring when ``recent``),
-    then send it to ``group`` (the key's own group unless told). ``keep=False`` only sends."""
+    then send it to every page watching ``key``. ``keep=False`` only sends."""
     if keep:
         store = get_store() if store is None else store
         await store.aput(key, dict(event))
         if recent:
             await store.aappend_recent(key, dict(event), recent)
-    if "msg" in event:
-        # Every receiver reads the same message; none may change it.
-        event = {**event, "msg": SharedMessage(event["msg"])}
-    await (get_channel_layer() if layer is None else layer).group_send(group or topic_group(key), event)
+    await feed.announce(event)
+
+
+async def aannounce_status(status: dict[str, Any], *, store: StateStore | None = None) -> None:
+    """Store the link's status and send it to every live page."""
+    await (get_store() if store is None else store).aput(STATUS_KEY, dict(status))
+    await feed.announce_status(status)
 
 
 async def apublish_state(key: str, msg: dict[str, Any], t: float | None = None, *, keep: bool = True) -> None:

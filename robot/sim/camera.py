@@ -115,6 +115,7 @@ class VideoServer:
         self.server: asyncio.Server | None = None
         self.port = 0
         self.writers: set[asyncio.StreamWriter] = set()
+        self.streams = 0  # open MJPEG streams (benches check a relay holds one)
 
     async def start(self, host: str, port: int) -> None:
         self.server = await asyncio.start_server(self._handle, host, port, reuse_address=True)
@@ -208,6 +209,13 @@ class VideoServer:
             f"Access-Control-Allow-Origin: *\r\nConnection: close\r\n"
             f"Content-Type: multipart/x-mixed-replace;boundary={BOUNDARY}\r\n\r\n".encode()
         )
+        self.streams += 1
+        try:
+            await self._frames(writer, width, height, quality)
+        finally:
+            self.streams -= 1
+
+    async def _frames(self, writer: asyncio.StreamWriter, width: int, height: int, quality: int) -> None:
         while True:
             jpeg = await asyncio.to_thread(self.renderer.frame, width, height, quality)
             writer.write(

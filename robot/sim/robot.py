@@ -286,6 +286,7 @@ class SimRobot:
             "clients": len(self.broker.clients),
             "url": self.url,
             "video_port": self.video_port,
+            "video_streams": self.video.streams if self.video is not None else 0,
             "map": {"name": self.world.name, "width": self.world.width, "height": self.world.height,
                     "resolution": self.world.resolution, "origin": [self.world.origin_x, self.world.origin_y]},
             "state": {

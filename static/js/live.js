@@ -73,10 +73,15 @@ class Live {
     };
     ws.onmessage = (ev) => {
       const frame = JSON.parse(ev.data);
-      if (frame.kind === "update") {
-        this.#latest.set(frame.key, frame);
-        for (const fn of this.#handlers.get(frame.key) ?? []) {
-          try { fn(frame); } catch (e) { console.error("live update", frame.key, e); }
+      // One frame per server tick carries every key that changed.
+      const updates = frame.kind === "updates" ? frame.updates : frame.kind === "update" ? [frame] : null;
+      if (updates) {
+        for (const update of updates) {
+          const one = { kind: "update", ...update };
+          this.#latest.set(one.key, one);
+          for (const fn of this.#handlers.get(one.key) ?? []) {
+            try { fn(one); } catch (e) { console.error("live update", one.key, e); }
+          }
         }
       } else if (frame.kind === "status") this.#setStatus(frame);
       else if (frame.kind === "error") notify(frame.message, "error");

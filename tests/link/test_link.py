@@ -7,7 +7,7 @@ import pytest
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.bus import RobotOffline, apublish, arequest
-from tests.helpers import async_wait_until, receive_until, ws_communicator
+from tests.helpers import async_wait_until, receive_frame, receive_until, ws_communicator
 
 BATTERY = "battery_soc"
 
@@ -45,7 +45,7 @@ async def test_it_coalesces_high_rate_topics_for_browsers(link, sim, viewer):
     start = loop.time()
     count = 0
     while loop.time() - start < 2.0:
-        frame = await communicator.receive_json_from(timeout=3)
+        frame = await receive_frame(communicator, timeout=3)
         count += frame["kind"] == "update" and frame["key"] == "tf"
     # /tf is published far faster than its 5 Hz UI rate.
     assert 3 <= count <= 12

@@ -1,0 +1,122 @@
+"""REST API under load, through the real stack (simulator + Daphne, embedded).
+
+1. ``GET /api/robot/state/`` with a token, 50 connections kept alive, for 20 s:
+   ``state_api_rps``, ``state_api_p99_ms`` (and p50).
+2. 200 sequential speech commands, API call → the message's arrival at the simulator (the
+   simulator stamps every message it receives with its wall clock; same machine, same clock):
+   ``command_to_robot_p50_ms``, ``command_to_robot_p99_ms``; and the API round trip.
+
+Run: ``.venv/bin/python bench/api_throughput.py`` (no arguments, ~40 s). Prints ``name: value``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import sys
+import time
+import urllib.parse
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import aiohttp  # noqa: E402
+
+from robot import interface as ri  # noqa: E402
+from tests.stack import PASSWORD, Stack  # noqa: E402
+
+log = logging.getLogger("bench.api_throughput")
+
+CONNECTIONS = 50
+DURATION_S = 20.0
+SPEECH_N = 200
+
+
+def quantile(ordered: list[float], q: float) -> float:
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+
+
+def call(url: str, body: dict | None = None, token: str = "") -> dict:
+    data = json.dumps(body).encode() if body is not None else None
+    req = urllib.request.Request(url, data=data, headers={"Content-Type": "application/json",
+                                                         **({"Authorization": f"Token {token}"} if token else {})})
+    with urllib.request.urlopen(req, timeout=10) as res:
+        return json.loads(res.read())
+
+
+async def hammer(url: str, token: str) -> tuple[int, list[float], int]:
+    latencies: list[float] = []
+    errors = 0
+    deadline = time.monotonic() + DURATION_S
+    headers = {"Authorization": f"Token {token}"}
+
+    async def worker(session: aiohttp.ClientSession) -> None:
+        nonlocal errors
+        while time.monotonic() < deadline:
+            t0 = time.perf_counter()
+            async with session.get(url, headers=headers) as res:
+                await res.read()
+                if res.status != 200:
+                    errors += 1
+                    continue
+            latencies.append((time.perf_counter() - t0) * 1000)
+
+    connector = aiohttp.TCPConnector(limit=CONNECTIONS)
+    async with aiohttp.ClientSession(connector=connector, timeout=aiohttp.ClientTimeout(total=30)) as session:
+        started = time.monotonic()
+        await asyncio.gather(*(worker(session) for _ in range(CONNECTIONS)))
+        elapsed = time.monotonic() - started
+    return round(len(latencies) / elapsed), sorted(latencies), errors
+
+
+def received(stack: Stack, topic: str, last: int) -> dict:
+    query = urllib.parse.urlencode({"topic": topic, "last": last})
+    with urllib.request.urlopen(f"http://127.0.0.1:{stack.video_port}/sim/received?{query}", timeout=5) as res:
+        return json.loads(res.read())
+
+
+def speech_commands(stack: Stack, token: str) -> tuple[list[float], list[float]]:
+    topic = ri.topic("text_to_speech").name
+    before = received(stack, topic, 0)["count"]
+    sent: dict[str, float] = {}
+    round_trips = []
+    for i in range(SPEECH_N):
+        text = f"bench {i}"
+        sent[text] = time.time()
+        t0 = time.perf_counter()
+        call(f"{stack.url}/api/robot/speech/", {"text": text}, token)
+        round_trips.append((time.perf_counter() - t0) * 1000)
+    deadline = time.monotonic() + 10
+    while received(stack, topic, 0)["count"] < before + SPEECH_N and time.monotonic() < deadline:
+        time.sleep(0.1)
+    arrivals = {m["msg"]["data"]: m["t"] for m in received(stack, topic, SPEECH_N)["messages"]}
+    missing = set(sent) - set(arrivals)
+    if missing:
+        raise SystemExit(f"{len(missing)} speech commands never reached the robot")
+    return sorted((arrivals[text] - t) * 1000 for text, t in sent.items()), sorted(round_trips)
+
+
+def main() -> None:
+    logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
+    with Stack(sim_args=("--startup-s", "0.5"), env={"COMMAND_THROTTLE_RATE": "100000/min"}) as stack:
+        stack.wait_robot_online()
+        token = call(f"{stack.url}/api/auth/token/", {"username": "otto", "password": PASSWORD})["token"]
+        log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
+        rps, latencies, errors = asyncio.run(hammer(f"{stack.url}/api/robot/state/", token))
+        print(f"state_api_rps: {rps}")
+        print(f"state_api_p50_ms: {quantile(latencies, 0.5):.1f}")
+        print(f"state_api_p99_ms: {quantile(latencies, 0.99):.1f}")
+        print(f"state_api_errors: {errors}", flush=True)
+        log.info("%d sequential speech commands", SPEECH_N)
+        to_robot, round_trips = speech_commands(stack, token)
+        print(f"command_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
+        print(f"command_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
+        print(f"command_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
+        print(f"command_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,319 @@
+"""Live fan-out under load: N browsers through the product against N browsers straight on rosbridge.
+
+Starts the simulator at its full topic rates (odom at 10 Hz is the probe: the simulator stamps each
+``/odom`` header with its wall clock as it publishes), then the product (real Daphne, embedded), and
+drives N logged-in websocket clients from a separate process, each watching the dashboard's keys
+plus odom. The same N clients then subscribe to the same topics straight on the simulator's
+rosbridge port. A reference subscriber in this process records every probe the simulator sent;
+a probe counts as lost for a client when neither it nor a newer one reached that client within 1 s.
+
+Second section, scaled: a private Redis, ``manage.py robotlink`` and two Daphne processes, with
+1000 clients split across the two.
+
+Run: ``.venv/bin/python bench/live_fanout.py`` (no arguments, ~4 min). Prints ``name: value``.
+The client process is this file run with ``--clients`` (internal).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import bisect
+import json
+import logging
+import os
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from websockets.asyncio.client import connect  # noqa: E402
+
+from robot import interface as ri  # noqa: E402
+
+log = logging.getLogger("bench.live_fanout")
+
+SIZES = (50, 200, 500)
+SCALED = 1000
+BATCH = 50  # connections opened at once
+WARMUP_S = 2.0
+MEASURE_S = 10.0
+LOST_AFTER_S = 1.0
+IDLE_SOCKETS = 200
+PROBE_KEY = "odom"
+HOME_KEYS = (
+    "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
+    "state_change", "state_transitions", "emotional_state", "emotion_system_status",
+    "text_to_speech", "tts_feedback", "current_location", "rosout", "robot_pose", "smach_status",
+)
+KEYS = [*HOME_KEYS, PROBE_KEY]
+
+
+# --- the client process ----------------------------------------------------------------
+
+
+def probe_stamps(raw: str, direct: bool) -> list[float]:
+    """The probe's send times in one frame (product frame or rosbridge message)."""
+    if direct:
+        if '"/odom"' not in raw:
+            return []
+        msgs = [json.loads(raw).get("msg", {})]
+    else:
+        if '"odom"' not in raw:
+            return []
+        frame = json.loads(raw)
+        updates = frame.get("updates") or ([frame] if frame.get("kind") == "update" else [])
+        msgs = [u["msg"] for u in updates if u.get("key") == PROBE_KEY]
+    return [m["header"]["stamp"]["secs"] + m["header"]["stamp"]["nsecs"] / 1e9 for m in msgs if "header" in m]
+
+
+async def client(url: str, cookie: str, mode: str, window: list[float], out: list[tuple[float, float]],
+                 opened: asyncio.Future) -> None:
+    direct = mode == "direct"
+    headers = {} if direct else {"Cookie": cookie}
+    origin = None if direct else url.replace("ws://", "http://").split("/ws/")[0]
+    try:
+        ws = await connect(url, origin=origin, additional_headers=headers, max_size=None, open_timeout=30)
+        if direct:
+            for key in KEYS:
+                t = ri.topic(key)
+                await ws.send(json.dumps({"op": "subscribe", "topic": t.name, "type": t.type}))
+        else:
+            first = json.loads(await asyncio.wait_for(ws.recv(), 30))
+            if first.get("kind") != "status":
+                raise RuntimeError(f"first frame was {first}")
+            if mode == "watch":
+                await ws.send(json.dumps({"action": "watch", "keys": KEYS}))
+    except Exception as exc:
+        opened.set_result(exc)
+        return
+    opened.set_result(None)
+    async with ws:
+        while True:
+            raw = await ws.recv()
+            now = time.time()
+            if now >= window[1]:
+                return
+            if now >= window[0]:
+                for stamp in probe_stamps(raw, direct):
+                    out.append((stamp, now))
+
+
+async def run_clients(urls: list[str], cookie: str, mode: str, n: int) -> dict:
+    window = [float("inf"), float("inf")]
+    samples: list[list[tuple[float, float]]] = [[] for _ in range(n)]
+    tasks, failed = [], 0
+    for start in range(0, n, BATCH):
+        batch = []
+        for i in range(start, min(n, start + BATCH)):
+            opened = asyncio.get_running_loop().create_future()
+            tasks.append(asyncio.create_task(client(urls[i % len(urls)], cookie, mode, window, samples[i], opened)))
+            batch.append(opened)
+        failed += sum(1 for result in await asyncio.gather(*batch) if result is not None)
+    print("connected", flush=True)
+    if mode == "idle":
+        await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
+        return {"failed": failed}
+    window[0] = time.time() + WARMUP_S
+    window[1] = window[0] + MEASURE_S
+    await asyncio.sleep(WARMUP_S)
+    print("measuring", flush=True)
+    await asyncio.sleep(MEASURE_S)
+    print("measured", flush=True)
+    await asyncio.wait(tasks, timeout=15)
+    return {"failed": failed, "window": window, "samples": samples}
+
+
+def client_main(args: argparse.Namespace) -> None:
+    result = asyncio.run(run_clients(args.url, os.environ.get("BENCH_COOKIE", ""), args.mode, args.clients))
+    print("RESULT " + json.dumps(result), flush=True)
+    os._exit(0)  # skip closing hundreds of sockets one by one
+
+
+# --- the driver --------------------------------------------------------------------------
+
+
+class Reference(threading.Thread):
+    """Every probe the simulator sent, heard by one quiet subscriber straight on rosbridge."""
+
+    def __init__(self, rosbridge_url: str) -> None:
+        super().__init__(daemon=True)
+        self.url = rosbridge_url
+        self.stamps: list[float] = []
+        self.ready = threading.Event()
+
+    def run(self) -> None:
+        from websockets.sync.client import connect as sync_connect
+
+        t = ri.topic(PROBE_KEY)
+        with sync_connect(self.url, max_size=None) as ws:
+            ws.send(json.dumps({"op": "subscribe", "topic": t.name, "type": t.type}))
+            self.ready.set()
+            for raw in ws:
+                self.stamps.extend(probe_stamps(raw, direct=True))
+
+
+def cpu_seconds(pids: list[int]) -> float:
+    total = 0.0
+    for pid in pids:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return total
+
+
+def rss_kb(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    return 0
+
+
+def spawn_clients(urls: list[str], cookie: str, mode: str, n: int) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, __file__, "--clients", str(n), "--mode", mode, *[a for u in urls for a in ("--url", u)]],
+        stdout=subprocess.PIPE, stdin=subprocess.PIPE, text=True, cwd=ROOT,
+        env={**os.environ, "BENCH_COOKIE": cookie, "DJANGO_SETTINGS_MODULE": ""},
+    )
+
+
+def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int]) -> dict:
+    proc = spawn_clients(urls, cookie, mode, n)
+    assert proc.stdout is not None
+    cpu0 = t0 = 0.0
+    for line in proc.stdout:
+        if line.startswith("measuring"):
+            cpu0, t0 = cpu_seconds(server_pids), time.monotonic()
+        elif line.startswith("measured"):
+            cpu = (cpu_seconds(server_pids) - cpu0) / (time.monotonic() - t0) * 100
+        elif line.startswith("RESULT "):
+            result = json.loads(line[7:])
+            result["cpu_pct"] = cpu
+            proc.wait(30)
+            return result
+    raise RuntimeError(f"client process ended with {proc.wait()}")
+
+
+def idle_memory(url: str, cookie: str, pid: int) -> float:
+    before = rss_kb(pid)
+    proc = spawn_clients([url], cookie, "idle", IDLE_SOCKETS)
+    assert proc.stdout is not None and proc.stdin is not None
+    for line in proc.stdout:
+        if line.startswith("connected"):
+            break
+    time.sleep(1.0)
+    after = rss_kb(pid)
+    proc.stdin.write("\n")
+    proc.stdin.flush()
+    proc.wait(60)
+    return (after - before) / IDLE_SOCKETS
+
+
+def quantile(ordered: list[float], q: float) -> float:
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))] if ordered else float("nan")
+
+
+def summarise(result: dict, sent: list[float]) -> dict[str, float]:
+    w0, w1 = result["window"]
+    latencies = sorted((now - stamp) * 1000 for samples in result["samples"] for stamp, now in samples)
+    due = [s for s in sent if w0 + 0.2 <= s <= w1 - LOST_AFTER_S]  # each had its full second in the window
+    lost = 0
+    for samples in result["samples"]:
+        samples.sort()
+        stamps = [s for s, _ in samples]
+        earliest = [0.0] * len(samples)  # the earliest arrival of this probe or any newer one
+        best = float("inf")
+        for i in range(len(samples) - 1, -1, -1):
+            best = min(best, samples[i][1])
+            earliest[i] = best
+        for s in due:
+            i = bisect.bisect_left(stamps, s - 1e-6)
+            if i == len(samples) or earliest[i] > s + LOST_AFTER_S:
+                lost += 1
+    total = len(due) * len(result["samples"])
+    return {"p50": quantile(latencies, 0.5), "p99": quantile(latencies, 0.99),
+            "lost": 100.0 * lost / total if total else float("nan")}
+
+
+def embedded_section() -> None:
+    from teleop_latency import login
+
+    from tests.stack import Stack
+
+    with Stack() as stack:
+        stack.wait_robot_online()
+        cookie = login(stack, "vera")
+        url = f"ws://127.0.0.1:{stack.web_port}/ws/live/"
+        reference = Reference(f"ws://127.0.0.1:{stack.sim_port}")
+        reference.start()
+        reference.ready.wait(10)
+        print(f"fanout_mem_per_socket_kb: {idle_memory(url, cookie, stack.web.pid):.1f}", flush=True)
+        for n in SIZES:
+            log.info("embedded: %d clients through the product", n)
+            result = drive([url], cookie, "watch", n, [stack.web.pid])
+            figures = summarise(result, reference.stamps)
+            print(f"fanout_{n}_p50_ms: {figures['p50']:.1f}")
+            print(f"fanout_{n}_p99_ms: {figures['p99']:.1f}")
+            print(f"fanout_{n}_lost_pct: {figures['lost']:.2f}")
+            print(f"fanout_{n}_handshakes_failed: {result['failed']}")
+            print(f"fanout_{n}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+            log.info("embedded: %d clients straight to rosbridge", n)
+            result = drive([f"ws://127.0.0.1:{stack.sim_port}"], "", "direct", n, [stack.sim_proc.pid])
+            figures = summarise(result, reference.stamps)
+            print(f"direct_{n}_p50_ms: {figures['p50']:.1f}")
+            print(f"direct_{n}_p99_ms: {figures['p99']:.1f}", flush=True)
+
+
+def scaled_section() -> None:
+    from teleop_latency import login
+
+    from tests.stack import Stack, free_port
+
+    redis_port = free_port()
+    redis = subprocess.Popen(["redis-server", "--port", str(redis_port), "--save", "", "--appendonly", "no"],
+                             stdout=subprocess.DEVNULL, start_new_session=True)
+    try:
+        with Stack(env={"REDIS_URL": f"redis://127.0.0.1:{redis_port}/0"}, webs=2, robotlink=True) as stack:
+            stack.wait_robot_online()
+            cookie = login(stack, "vera")
+            urls = [f"ws://127.0.0.1:{port}/ws/live/" for port in stack.web_ports]
+            reference = Reference(f"ws://127.0.0.1:{stack.sim_port}")
+            reference.start()
+            reference.ready.wait(10)
+            log.info("scaled: %d clients over two web processes", SCALED)
+            pids = [p.pid for p in stack.webs] + [stack.robotlink.pid]
+            result = drive(urls, cookie, "watch", SCALED, pids)
+            figures = summarise(result, reference.stamps)
+            print(f"scaled_{SCALED}_p50_ms: {figures['p50']:.1f}")
+            print(f"scaled_{SCALED}_p99_ms: {figures['p99']:.1f}")
+            print(f"scaled_{SCALED}_lost_pct: {figures['lost']:.2f}")
+            print(f"scaled_{SCALED}_handshakes_failed: {result['failed']}")
+            print(f"scaled_{SCALED}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+    finally:
+        redis.terminate()
+        redis.wait(5)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--clients", type=int)
+    parser.add_argument("--mode", choices=["watch", "direct", "idle"])
+    parser.add_argument("--url", action="append")
+    parser.add_argument("--section", choices=["embedded", "scaled"])
+    args = parser.parse_args()
+    if args.clients:
+        client_main(args)
+        return
+    logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
+    if args.section != "scaled":
+        embedded_section()
+    if args.section != "embedded":
+        scaled_section()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,116 @@
+"""How a live update reaches the watching sockets of every web process, serialised once.
+
+Embedded (no ``REDIS_URL``): the link and the web server share the process, so an update goes
+straight into the process's hub. Scaled: it is published once on one Redis pub/sub channel, and
+each web process holds ONE subscription to it that feeds its own hub (``run_subscriber``).
+The channel layer carries no topic updates.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import weakref
+from typing import Any
+
+from django.conf import settings
+
+from robot import interface as ri
+from robot.live.frames import status_text, update_fragment
+from robot.live.groups import STATUS_KEY
+from robot.live.hub import Hub, get_hub, hubs
+from robot.live.state import redis_key
+
+log = logging.getLogger(__name__)
+
+RETRY_S = 1.0
+_clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
+_subscribers: weakref.WeakKeyDictionary[Hub, asyncio.Task] = weakref.WeakKeyDictionary()
+
+
+def keeps_every_message(key: str) -> bool:
+    """Event-like keys (logs, state changes) are never coalesced; for the rest the latest value wins."""
+    try:
+        return ri.topic(key).ui_rate_hz is None
+    except KeyError:  # keys the server writes itself: one current value each
+        return False
+
+
+def channel() -> str:
+    return redis_key("live")
+
+
+def _redis() -> Any:
+    import redis.asyncio
+
+    loop = asyncio.get_running_loop()
+    client = _clients.get(loop)
+    if client is None:
+        client = _clients[loop] = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    return client
+
+
+async def announce(update: dict[str, Any]) -> None:
+    """Send one update to every socket watching its key, in every web process."""
+    key, text, t = update["key"], update_fragment(update), float(update["t"])
+    every = keeps_every_message(key)
+    if settings.REDIS_URL:
+        await _redis().publish(channel(), f"{key}\n{t!r}\n{int(every)}\n{text}")
+        return
+    for hub in hubs():
+        hub.publish(key, text, t, every=every)
+
+
+async def announce_status(status: dict[str, Any]) -> None:
+    """The link's status to every live socket, in every web process."""
+    text = status_text(status)
+    if settings.REDIS_URL:
+        await _redis().publish(channel(), f"{STATUS_KEY}\n0\n0\n{text}")
+        return
+    for hub in hubs():
+        hub.publish_status(text)
+
+
+def local_hub() -> Hub:
+    """This process's hub; scaled, also its one Redis subscription (started on first use)."""
+    hub = get_hub()
+    if settings.REDIS_URL:
+        task = _subscribers.get(hub)
+        if task is None or task.done():
+            _subscribers[hub] = hub.loop.create_task(run_subscriber(hub))
+    return hub
+
+
+def deliver(hub: Hub, data: bytes | str) -> None:
+    """One message from the Redis channel into the hub."""
+    raw = data.decode() if isinstance(data, bytes) else data
+    key, t, every, text = raw.split("\n", 3)
+    if key == STATUS_KEY:
+        hub.publish_status(text)
+    else:
+        hub.publish(key, text, float(t), every=every == "1")
+
+
+async def run_subscriber(hub: Hub) -> None:
+    """Feed ``hub`` from the Redis channel for as long as the process runs; resubscribe after errors."""
+    import redis.asyncio
+
+    while True:
+        client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+        try:
+            async with client.pubsub(ignore_subscribe_messages=True) as pubsub:
+                await pubsub.subscribe(channel())
+                log.info("live updates: subscribed to %s", channel())
+                async for message in pubsub.listen():
+                    if message.get("type") == "message":
+                        try:
+                            deliver(hub, message["data"])
+                        except ValueError:
+                            log.warning("malformed live update on %s", channel())
+        except asyncio.CancelledError:
+            raise
+        except Exception:
+            log.warning("live update subscription lost; resubscribing in %g s", RETRY_S, exc_info=True)
+            await asyncio.sleep(RETRY_S)
+        finally:
+            await client.aclose()

@@ -1,0 +1,33 @@
+"""The JSON frames the live websocket sends, built from pre-serialised parts.
+
+An update is serialised once per process (``update_fragment``); a socket's frame for a UI tick
+joins the fragments of every key that changed (``batch_frame``), so no update is encoded per socket.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from typing import Any
+
+from robot.link.wire import jsonable
+from robot.live.state import status_view
+
+_COMPACT = (",", ":")
+
+
+def update_fragment(update: dict[str, Any]) -> str:
+    """The browser's view of one update: ``{"key":…,"msg":…,"t":…}``."""
+    return json.dumps({"key": update["key"], "msg": update["msg"], "t": update["t"]},
+                      default=jsonable, separators=_COMPACT)
+
+
+def batch_frame(fragments: Iterable[str]) -> str:
+    """One frame with every pending update of a socket: ``{"kind":"updates","updates":[…]}``."""
+    return '{"kind":"updates","updates":[' + ",".join(fragments) + "]}"
+
+
+def status_text(status: dict[str, Any] | None) -> str:
+    """The link's status as the browser sees it (offline when the link stopped reporting)."""
+    view = status_view(status)
+    return json.dumps({"kind": "status", **{k: v for k, v in view.items() if k != "type"}}, separators=_COMPACT)

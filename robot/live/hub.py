@@ -1,0 +1,200 @@
+"""The process's live fan-out hub: every watching websocket of this web process, fed once per update.
+
+Topic updates do not travel through per-socket channel-layer groups (that costs clients x topics
+work per message). Instead each web process keeps one hub on its event loop:
+
+- a socket registers the keys it watches;
+- an update arrives already serialised (once per process) and is offered to each watching
+  socket's slot: latest value wins for coalesced keys, every message is kept (bounded) for
+  event-like keys;
+- at most once per UI tick, every socket with something new gets ONE frame carrying every
+  changed key, written with one cheap send; a socket whose previous write has not finished is
+  skipped until the next tick, so a slow browser gets the newest value later and never stalls
+  the others or the link.
+
+Embedded, the robot link feeds the hub directly; scaled, each web process holds one Redis
+subscription that feeds it (robot.live.broadcast).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import threading
+import time
+from collections.abc import Awaitable, Callable, Iterable
+from typing import Any
+
+from robot.live.frames import batch_frame
+
+log = logging.getLogger(__name__)
+
+# Writes one websocket text frame (the ASGI send of the socket's consumer, wrapped).
+Send = Callable[[str], Awaitable[None]]
+
+TICK_S = 0.025
+# Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
+MAX_PENDING = 300
+_seq = itertools.count()
+
+
+class Socket:
+    """One websocket's watched keys and pending updates (pre-serialised JSON fragments)."""
+
+    __slots__ = ("dropped", "keys", "pending", "send", "sending", "status", "tracking")
+
+    def __init__(self, send: Send) -> None:
+        self.send = send
+        self.keys: set[str] = set()
+        self.pending: dict[Any, str] = {}  # key (latest wins) or (key, seq) (every message) -> fragment
+        self.status: str | None = None  # the newest status frame not yet sent
+        self.sending = False
+        self.dropped = 0
+        # While the first snapshot is read: receive time of the live updates already offered per key.
+        self.tracking: dict[str, list[float]] | None = None
+
+    def offer(self, key: str, fragment: str, t: float, every: bool) -> None:
+        pending = self.pending
+        if every:
+            if len(pending) >= MAX_PENDING:
+                del pending[next(iter(pending))]
+                self.dropped += 1
+            pending[(key, next(_seq))] = fragment
+        else:
+            pending.pop(key, None)  # re-insert: the frame lists keys roughly in arrival order
+            pending[key] = fragment
+        if self.tracking is not None:
+            self.tracking.setdefault(key, []).append(t)
+
+    def frame(self) -> str:
+        text = batch_frame(self.pending.values())
+        self.pending.clear()
+        return text
+
+
+class Hub:
+    def __init__(self, loop: asyncio.AbstractEventLoop, *, tick_s: float = TICK_S) -> None:
+        self.loop = loop
+        self.tick_s = tick_s
+        self.sockets: set[Socket] = set()
+        self._watchers: dict[str, set[Socket]] = {}
+        self._dirty: set[Socket] = set()
+        self._flush_at: float | None = None
+        self._last_flush = 0.0
+        self._flushing: asyncio.Task | None = None
+        self._thread = threading.get_ident()
+
+    # --- sockets ---------------------------------------------------------------------
+
+    def attach(self, send: Send) -> Socket:
+        socket = Socket(send)
+        self.sockets.add(socket)
+        return socket
+
+    def detach(self, socket: Socket) -> None:
+        self.sockets.discard(socket)
+        self._dirty.discard(socket)
+        for key in socket.keys:
+            watchers = self._watchers.get(key)
+            if watchers is not None:
+                watchers.discard(socket)
+                if not watchers:
+                    del self._watchers[key]
+        socket.keys.clear()
+        socket.pending.clear()
+
+    def watch(self, socket: Socket, keys: Iterable[str]) -> None:
+        for key in keys:
+            if key not in socket.keys:
+                socket.keys.add(key)
+                self._watchers.setdefault(key, set()).add(socket)
+
+    # --- updates ---------------------------------------------------------------------
+
+    def publish(self, key: str, fragment: str, t: float, *, every: bool = False) -> None:
+        """Offer one serialised update (``{"key":…,"msg":…,"t":…}``) to every socket watching ``key``."""
+        if threading.get_ident() != self._thread:
+            self.loop.call_soon_threadsafe(self.publish, key, fragment, t, every)
+            return
+        watchers = self._watchers.get(key)
+        if not watchers:
+            return
+        for socket in watchers:
+            socket.offer(key, fragment, t, every)
+        self._dirty.update(watchers)
+        self._schedule()
+
+    def publish_status(self, frame: str) -> None:
+        """A link status frame for every socket (latest wins)."""
+        if threading.get_ident() != self._thread:
+            self.loop.call_soon_threadsafe(self.publish_status, frame)
+            return
+        for socket in self.sockets:
+            socket.status = frame
+        self._dirty.update(self.sockets)
+        self._schedule()
+
+    def offer(self, socket: Socket, key: str, fragment: str, t: float, *, every: bool = False) -> None:
+        """One socket only (its first snapshot)."""
+        if socket in self.sockets:
+            socket.offer(key, fragment, t, every)
+            self._dirty.add(socket)
+            self._schedule()
+
+    # --- writing ---------------------------------------------------------------------
+
+    def _schedule(self) -> None:
+        if self._flush_at is not None:
+            return
+        self._flush_at = max(time.monotonic(), self._last_flush + self.tick_s)
+        self.loop.call_at(self.loop.time() + max(0.0, self._flush_at - time.monotonic()), self._flush)
+
+    def _flush(self) -> None:
+        self._flush_at = None
+        if self._flushing is not None and not self._flushing.done():
+            self._schedule()  # the previous writes are still running: next tick
+            return
+        self._last_flush = time.monotonic()
+        ready = [s for s in self._dirty if not s.sending]
+        self._dirty.difference_update(ready)
+        if self._dirty:
+            self._schedule()
+        if ready:
+            self._flushing = self.loop.create_task(self._write(ready))
+
+    async def _write(self, sockets: list[Socket]) -> None:
+        for socket in sockets:
+            frames = []
+            if socket.status is not None:
+                frames.append(socket.status)
+                socket.status = None
+            if socket.pending:
+                frames.append(socket.frame())
+            socket.sending = True
+            try:
+                for frame in frames:
+                    await socket.send(frame)
+            except Exception:
+                log.debug("live socket write failed", exc_info=True)
+            finally:
+                socket.sending = False
+
+
+_hubs: dict[asyncio.AbstractEventLoop, Hub] = {}
+
+
+def get_hub() -> Hub:
+    """The hub of the running event loop (one per web process; tests get one per loop)."""
+    loop = asyncio.get_running_loop()
+    hub = _hubs.get(loop)
+    if hub is None:
+        for dead in [lp for lp in _hubs if lp.is_closed()]:
+            del _hubs[dead]
+        hub = _hubs[loop] = Hub(loop)
+    return hub
+
+
+def hubs() -> list[Hub]:
+    """Every live hub of this process (the link may publish from another loop in tests)."""
+    return [hub for loop, hub in list(_hubs.items()) if not loop.is_closed()]
