@@ -239,7 +239,7 @@ def summarise(result: dict, sent: list[float]) -> dict[str, float]:
             "lost": 100.0 * lost / total if total else float("nan")}
 
 
-def embedded_section() -> None:
+def embedded_section(sizes: tuple[int, ...]) -> None:
     from teleop_latency import login
 
     from tests.stack import Stack
@@ -252,7 +252,7 @@ def embedded_section() -> None:
         reference.start()
         reference.ready.wait(10)
         print(f"fanout_mem_per_socket_kb: {idle_memory(url, cookie, stack.web.pid):.1f}", flush=True)
-        for n in SIZES:
+        for n in sizes:
             log.info("embedded: %d clients through the product", n)
             result = drive([url], cookie, "watch", n, [stack.web.pid])
             figures = summarise(result, reference.stamps)
@@ -304,13 +304,15 @@ def main() -> None:
     parser.add_argument("--mode", choices=["watch", "direct", "idle"])
     parser.add_argument("--url", action="append")
     parser.add_argument("--section", choices=["embedded", "scaled"])
+    parser.add_argument("--sizes", type=lambda v: tuple(int(n) for n in v.split(",")), default=SIZES,
+                        help="client counts of the embedded section, e.g. 500 (profiling)")
     args = parser.parse_args()
     if args.clients:
         client_main(args)
         return
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
     if args.section != "scaled":
-        embedded_section()
+        embedded_section(args.sizes)
     if args.section != "embedded":
         scaled_section()
 

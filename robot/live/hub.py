@@ -33,7 +33,10 @@ log = logging.getLogger(__name__)
 # Writes one websocket text frame (the ASGI send of the socket's consumer, wrapped).
 Send = Callable[[str], Awaitable[None]]
 
-TICK_S = 0.025
+# At most one frame per socket per tick; the first update after a quiet spell waits GATHER_S so
+# that messages the robot publishes together (pose and odometry) share a frame.
+TICK_S = 0.02
+GATHER_S = 0.003
 # Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
 MAX_PENDING = 300
 _seq = itertools.count()
@@ -147,8 +150,9 @@ class Hub:
     def _schedule(self) -> None:
         if self._flush_at is not None:
             return
-        self._flush_at = max(time.monotonic(), self._last_flush + self.tick_s)
-        self.loop.call_at(self.loop.time() + max(0.0, self._flush_at - time.monotonic()), self._flush)
+        now = time.monotonic()
+        self._flush_at = max(now + GATHER_S, self._last_flush + self.tick_s)
+        self.loop.call_at(self.loop.time() + (self._flush_at - now), self._flush)
 
     def _flush(self) -> None:
         self._flush_at = None
