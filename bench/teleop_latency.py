@@ -9,9 +9,7 @@ machine) from its ``/sim/received`` introspection endpoint. Prints ``name: value
 from __future__ import annotations
 
 import asyncio
-import http.cookiejar
 import json
-import re
 import statistics
 import sys
 import time
@@ -24,7 +22,7 @@ sys.path.insert(0, str(ROOT))
 
 from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
-from tests.stack import PASSWORD, Stack  # noqa: E402
+from tests.stack import Stack  # noqa: E402
 
 PRESSES = 40
 DISCONNECTS = 15
@@ -35,17 +33,7 @@ FORWARD = {"type": "input", "linear": 1.0, "angular": 0.0}
 
 def login(stack: Stack, username: str) -> str:
     """Log in through the form like a browser; return the Cookie header."""
-    jar = http.cookiejar.CookieJar()
-    opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar))
-    page = opener.open(f"{stack.url}/accounts/login/", timeout=10).read().decode()
-    token = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)
-    form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": token})
-    opener.open(urllib.request.Request(f"{stack.url}/accounts/login/", data=form.encode(),
-                                       headers={"Referer": f"{stack.url}/accounts/login/"}), timeout=10).read()
-    cookies = {c.name: c.value for c in jar}
-    if "sessionid" not in cookies:
-        raise SystemExit("login failed")
-    return "; ".join(f"{k}={v}" for k, v in cookies.items())
+    return stack.login_cookie(username)
 
 
 class Simulator:

@@ -7,7 +7,9 @@ given DATABASE_URL), free ports, and users per role.
 
 from __future__ import annotations
 
+import http.cookiejar
 import os
+import re
 import shutil
 import signal
 import socket
@@ -15,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.parse
 import urllib.request
 from pathlib import Path
 
@@ -122,6 +125,20 @@ class Stack:
             wait_for_port(port, proc=proc)
         self.web = self.webs[0]
         return self.web
+
+    def login_cookie(self, username: str) -> str:
+        """Log in through the form like a browser; return the Cookie header."""
+        jar = http.cookiejar.CookieJar()
+        opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar))
+        page = opener.open(f"{self.url}/accounts/login/", timeout=10).read().decode()
+        token = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)  # type: ignore[union-attr]
+        form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": token})
+        opener.open(urllib.request.Request(f"{self.url}/accounts/login/", data=form.encode(),
+                                           headers={"Referer": f"{self.url}/accounts/login/"}), timeout=10).read()
+        cookies = {c.name: c.value for c in jar}
+        if "sessionid" not in cookies:
+            raise RuntimeError(f"login as {username} failed")
+        return "; ".join(f"{k}={v}" for k, v in cookies.items())
 
     def wait_robot_online(self, timeout: float = 20.0) -> None:
         """Poll the server until its link reports the robot connected."""

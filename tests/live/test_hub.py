@@ -1,0 +1,132 @@
+"""The live hub: updates serialised once, a latest-value slot per key per socket, one frame per tick."""
+
+import asyncio
+import json
+
+import pytest
+
+from robot.live import feed, frames
+from robot.live.announce import aannounce, apublish_state, server_update
+from robot.live.hub import Hub, get_hub
+from tests.helpers import async_wait_until, receive_until, ws_communicator
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+
+class Recorder:
+    """A socket's writes, as the browser would parse them."""
+
+    def __init__(self) -> None:
+        self.frames: list[dict] = []
+
+    async def send(self, text: str) -> None:
+        self.frames.append(json.loads(text))
+
+    def updates(self) -> list[dict]:
+        return [u for f in self.frames if f["kind"] == "updates" for u in f["updates"]]
+
+
+def fragment(key: str, value, t: float) -> str:
+    return frames.update_fragment({"key": key, "msg": {"data": value}, "t": t})
+
+
+async def test_a_socket_gets_one_frame_per_tick_with_only_the_newest_value_of_each_key():
+    hub = Hub(asyncio.get_running_loop(), tick_s=0.05)
+    recorder = Recorder()
+    socket = hub.attach(recorder.send)
+    hub.watch(socket, ["odom", "battery_soc"])
+    for i in range(20):  # far faster than the tick: a slow socket's backlog never grows
+        hub.publish("odom", fragment("odom", i, 100 + i), 100 + i)
+    hub.publish("battery_soc", fragment("battery_soc", 0.5, 200), 200)
+    hub.publish("plan", fragment("plan", 1, 201), 201)  # nobody watches it
+    await async_wait_until(lambda: recorder.frames, timeout=2)
+    await asyncio.sleep(0.15)
+    assert len(recorder.frames) == 1
+    assert {u["key"]: u["msg"]["data"] for u in recorder.updates()} == {"odom": 19, "battery_soc": 0.5}
+
+
+async def test_event_like_keys_keep_every_message_in_order_up_to_a_bound():
+    hub = Hub(asyncio.get_running_loop())
+    recorder = Recorder()
+    socket = hub.attach(recorder.send)
+    hub.watch(socket, ["rosout"])
+    for i in range(5):
+        hub.publish("rosout", fragment("rosout", f"line {i}", 100 + i), 100 + i, every=True)
+    await async_wait_until(lambda: len(recorder.updates()) == 5, timeout=2)
+    assert [u["msg"]["data"] for u in recorder.updates()] == [f"line {i}" for i in range(5)]
+
+    from robot.live.hub import MAX_PENDING
+
+    for i in range(MAX_PENDING + 10):  # a socket far behind drops the oldest and counts them
+        socket.offer("rosout", fragment("rosout", i, i), i, every=True)
+    assert len(socket.pending) == MAX_PENDING and socket.dropped == 10
+
+
+async def test_a_socket_that_left_gets_nothing_and_is_forgotten():
+    hub = Hub(asyncio.get_running_loop())
+    stays, leaves = Recorder(), Recorder()
+    kept, gone = hub.attach(stays.send), hub.attach(leaves.send)
+    hub.watch(kept, ["odom"])
+    hub.watch(gone, ["odom"])
+    hub.detach(gone)
+    hub.publish("odom", fragment("odom", 1, 1), 1)
+    await async_wait_until(lambda: stays.frames, timeout=2)
+    assert not leaves.frames
+    assert hub.sockets == {kept} and hub._watchers == {"odom": {kept}}
+
+
+async def test_many_watchers_cost_one_serialisation_per_update(viewer, monkeypatch):
+    calls = []
+    real = feed.update_fragment
+    monkeypatch.setattr(feed, "update_fragment", lambda update: calls.append(update["key"]) or real(update))
+    communicators = [ws_communicator(viewer) for _ in range(20)]
+    for communicator in communicators:
+        assert (await communicator.connect())[0]
+        await receive_until(communicator, lambda f: f["kind"] == "status")
+        await communicator.send_json_to({"action": "watch", "keys": ["mode_request"]})
+    await async_wait_until(lambda: len(get_hub()._watchers.get("mode_request", ())) == 20, timeout=5)
+    calls.clear()
+    await apublish_state("mode_request", {"mode": "manual"})
+    for communicator in communicators:
+        frame = await receive_until(communicator, lambda f: f["kind"] == "update")
+        assert frame["key"] == "mode_request" and frame["msg"] == {"mode": "manual"}
+        await communicator.disconnect()
+    assert calls == ["mode_request"]
+    assert not get_hub().sockets
+
+
+async def test_updates_of_one_tick_reach_a_browser_in_one_frame(viewer):
+    communicator = ws_communicator(viewer)
+    assert (await communicator.connect())[0]
+    await receive_until(communicator, lambda f: f["kind"] == "status")
+    await communicator.send_json_to({"action": "watch", "keys": ["nav_goal", "nav_goal_status"]})
+    await async_wait_until(lambda: len(get_hub()._watchers.get("nav_goal_status", ())) == 1, timeout=5)
+    await aannounce("nav_goal", dict(server_update("nav_goal", {"x": 1})))
+    await aannounce("nav_goal_status", dict(server_update("nav_goal_status", {"status": "active"})))
+    frame = await communicator.receive_json_from(timeout=5)
+    assert frame["kind"] == "updates"
+    assert {u["key"] for u in frame["updates"]} == {"nav_goal", "nav_goal_status"}
+    await communicator.disconnect()
+
+
+async def test_the_first_snapshot_never_replaces_a_newer_live_value(viewer, monkeypatch):
+    from robot.live.state import get_store
+
+    store = get_store()
+    await store.aput("nav_goal", dict(server_update("nav_goal", {"x": "stored"}, t=100.0)))
+    communicator = ws_communicator(viewer)
+    assert (await communicator.connect())[0]
+    await receive_until(communicator, lambda f: f["kind"] == "status")
+    read = store.aget_many
+
+    async def read_then_a_newer_value_arrives(keys):
+        entries = await read(keys)
+        await aannounce("nav_goal", dict(server_update("nav_goal", {"x": "live"}, t=200.0)), keep=False)
+        return entries
+
+    monkeypatch.setattr(store, "aget_many", read_then_a_newer_value_arrives)
+    await communicator.send_json_to({"action": "watch", "keys": ["nav_goal"]})
+    first = await receive_until(communicator, lambda f: f["kind"] == "update")
+    assert first["msg"] == {"x": "live"}
+    assert not communicator.__dict__.get("_unbatched") and await communicator.receive_nothing(timeout=0.5)
+    await communicator.disconnect()
