@@ -27,7 +27,6 @@ from robot.live.groups import (
     LATCH_KEY,
     LINK_CHANNEL,
     REPLY_LIST_PREFIX,
-    STATUS_KEY,
     LinkReply,
     LinkRequest,
     LinkStatus,

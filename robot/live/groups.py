@@ -11,7 +11,6 @@ from typing import Any, Literal, TypedDict
 LINK_CHANNEL = "robot-link"
 # A request's reply_to with this prefix names a Redis list the link pushes its reply onto.
 REPLY_LIST_PREFIX = "redis-list:"
-STATUS_GROUP = "robot.status"
 # Every drive page hears who holds the driving lock.
 LOCK_GROUP = "teleop.lock"
 # Listening pages hear the robot's microphone; audio pages hear who holds the talk lock.
@@ -27,22 +26,6 @@ GOAL_STATUS_KEY = "nav_goal_status"  # what the robot reported for recent goals
 LOCATIONS_KEY = "nav_locations"  # sent on change only, never stored
 AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its word or its pose
 LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
-
-
-def topic_group(key: str) -> str:
-    return f"robot.topic.{key}"
-
-
-class SharedMessage(dict):
-    """A message every receiver of a group send may read but never changes.
-
-    The in-memory channel layer deep-copies a message for each channel; with 50 pages
-    watching a 10 Hz odometry topic those copies were the web process's largest CPU cost
-    and delayed every frame (bench/live_latency.py). Other layers serialise it as a dict.
-    """
-
-    def __deepcopy__(self, memo: dict[int, Any]) -> SharedMessage:
-        return self
 
 
 class TopicUpdate(TypedDict):

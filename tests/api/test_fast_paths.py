@@ -1,0 +1,47 @@
+"""The read path without needless work: token lookups cached briefly, static files and async views
+without the shared sync thread."""
+
+import pytest
+from django.test import AsyncClient
+from rest_framework.authtoken.models import Token
+
+from robot.api.common import CachedTokenAuthentication
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+
+@pytest.fixture(autouse=True)
+def _empty_token_cache():
+    CachedTokenAuthentication._cache.clear()
+    yield
+    CachedTokenAuthentication._cache.clear()
+
+
+def test_a_known_token_costs_no_query_after_the_first_request(client, viewer, django_assert_num_queries):
+    headers = {"Authorization": f"Token {Token.objects.create(user=viewer).key}"}
+    assert client.get("/api/robot/state/", headers=headers).status_code == 200
+    with django_assert_num_queries(0):
+        response = client.get("/api/robot/state/", headers=headers)
+    assert response.status_code == 200 and "connected" in response.json()
+
+
+def test_a_deleted_token_is_refused_at_once(client, viewer):
+    token = Token.objects.create(user=viewer)
+    headers = {"Authorization": f"Token {token.key}"}
+    assert client.get("/api/robot/state/", headers=headers).status_code == 200
+    token.delete()
+    response = client.get("/api/robot/state/", headers=headers)
+    assert response.status_code == 401 and response.json()["code"]
+
+
+def test_an_unknown_token_is_refused_and_not_cached(client):
+    response = client.get("/api/robot/state/", headers={"Authorization": "Token nope"})
+    assert response.status_code == 401
+    assert not CachedTokenAuthentication._cache
+
+
+async def test_static_files_are_still_served_by_whitenoise():
+    response = await AsyncClient().get("/static/js/live.js")
+    assert response.status_code == 200
+    body = b"".join(response.streaming_content)  # a file: read by the server in a worker thread
+    assert b"WebSocket" in body
