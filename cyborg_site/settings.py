@@ -67,15 +67,16 @@ INSTALLED_APPS = [
     "history",
 ]
 
+# Django's middleware, subclassed to run on the event loop for async views (cyborg_site.middleware).
 MIDDLEWARE = [
-    "django.middleware.security.SecurityMiddleware",
+    "cyborg_site.middleware.SecurityMiddleware",
     "cyborg_site.staticfiles.AsyncWhiteNoiseMiddleware",
-    "django.contrib.sessions.middleware.SessionMiddleware",
-    "django.middleware.common.CommonMiddleware",
-    "django.middleware.csrf.CsrfViewMiddleware",
-    "django.contrib.auth.middleware.AuthenticationMiddleware",
-    "django.contrib.messages.middleware.MessageMiddleware",
-    "django.middleware.clickjacking.XFrameOptionsMiddleware",
+    "cyborg_site.middleware.SessionMiddleware",
+    "cyborg_site.middleware.CommonMiddleware",
+    "cyborg_site.middleware.CsrfViewMiddleware",
+    "cyborg_site.middleware.AuthenticationMiddleware",
+    "cyborg_site.middleware.MessageMiddleware",
+    "cyborg_site.middleware.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",
     # Last: turns a lockout flagged during authentication into the lockout answer.
     "axes.middleware.AxesMiddleware",
