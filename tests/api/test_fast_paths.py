@@ -7,7 +7,7 @@ from rest_framework.authtoken.models import Token
 
 from robot.api.common import CachedTokenAuthentication
 
-pytestmark = pytest.mark.django_db(transaction=True)
+pytestmark = pytest.mark.django_db
 
 
 @pytest.fixture(autouse=True)
