@@ -2,10 +2,11 @@
 
 Starts the simulator at its full topic rates (odom at 10 Hz is the probe: the simulator stamps each
 ``/odom`` header with its wall clock as it publishes), then the product (real Daphne, embedded), and
-drives N logged-in websocket clients from a separate process, each watching the dashboard's keys
-plus odom. The same N clients then subscribe to the same topics straight on the simulator's
-rosbridge port. A reference subscriber in this process records every probe the simulator sent;
-a probe counts as lost for a client when neither it nor a newer one reached that client within 1 s.
+drives N logged-in websocket clients from a separate process (one per web process when there
+are several), each watching the dashboard's keys plus odom. The same N clients then subscribe to
+the same topics straight on the simulator's rosbridge port. A reference subscriber in this process
+records every probe the simulator sent; a probe counts as lost for a client when neither it nor a
+newer one reached that client within 1 s.
 
 Second section, scaled: a private Redis, ``manage.py robotlink`` and two Daphne processes, with
 1000 clients split across the two.
@@ -22,6 +23,7 @@ import bisect
 import json
 import logging
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -33,6 +35,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from websockets.asyncio.client import connect  # noqa: E402
+from websockets.exceptions import ConnectionClosed  # noqa: E402
 
 from robot import interface as ri  # noqa: E402
 
@@ -57,19 +60,23 @@ KEYS = [*HOME_KEYS, PROBE_KEY]
 # --- the client process ----------------------------------------------------------------
 
 
+# The probe's stamp read straight from the text: parsing every frame's JSON would make the client
+# process, not the server, the bottleneck at 1000 sockets. Product fragments are compact JSON
+# {"key":"odom","msg":{"header":{...,"stamp":{...}}}}; rosbridge messages carry "topic":"/odom".
+_STAMP = r'"header":\s*\{[^{}]*"stamp":\s*\{\s*"secs":\s*(\d+),\s*"nsecs":\s*(\d+)'
+PRODUCT_PROBE = re.compile(r'"key":"odom","msg":\{' + _STAMP)
+DIRECT_PROBE = re.compile(_STAMP)
+
+
 def probe_stamps(raw: str, direct: bool) -> list[float]:
     """The probe's send times in one frame (product frame or rosbridge message)."""
     if direct:
         if '"/odom"' not in raw:
             return []
-        msgs = [json.loads(raw).get("msg", {})]
+        found = DIRECT_PROBE.findall(raw)[:1]
     else:
-        if '"odom"' not in raw:
-            return []
-        frame = json.loads(raw)
-        updates = frame.get("updates") or ([frame] if frame.get("kind") == "update" else [])
-        msgs = [u["msg"] for u in updates if u.get("key") == PROBE_KEY]
-    return [m["header"]["stamp"]["secs"] + m["header"]["stamp"]["nsecs"] / 1e9 for m in msgs if "header" in m]
+        found = PRODUCT_PROBE.findall(raw)
+    return [int(secs) + int(nsecs) / 1e9 for secs, nsecs in found]
 
 
 async def client(url: str, cookie: str, mode: str, window: list[float], out: list[tuple[float, float]],
@@ -116,15 +123,13 @@ async def run_clients(urls: list[str], cookie: str, mode: str, n: int) -> dict:
             batch.append(opened)
         failed += sum(1 for result in await asyncio.gather(*batch) if result is not None)
     print("connected", flush=True)
+    # The driver answers with the window's start (epoch seconds), the same for every client process.
+    line = await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
     if mode == "idle":
-        await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
         return {"failed": failed}
-    window[0] = time.time() + WARMUP_S
+    window[0] = float(line)
     window[1] = window[0] + MEASURE_S
-    await asyncio.sleep(WARMUP_S)
-    print("measuring", flush=True)
-    await asyncio.sleep(MEASURE_S)
-    print("measured", flush=True)
+    await asyncio.sleep(max(0.0, window[1] - time.time()))
     await asyncio.wait(tasks, timeout=15)
     return {"failed": failed, "window": window, "samples": samples}
 
@@ -154,8 +159,11 @@ class Reference(threading.Thread):
         with sync_connect(self.url, max_size=None) as ws:
             ws.send(json.dumps({"op": "subscribe", "topic": t.name, "type": t.type}))
             self.ready.set()
-            for raw in ws:
-                self.stamps.extend(probe_stamps(raw, direct=True))
+            try:
+                for raw in ws:
+                    self.stamps.extend(probe_stamps(raw, direct=True))
+            except ConnectionClosed:
+                return  # the stack stopped
 
 
 def cpu_seconds(pids: list[int]) -> float:
@@ -181,33 +189,49 @@ def spawn_clients(urls: list[str], cookie: str, mode: str, n: int) -> subprocess
     )
 
 
-def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int]) -> dict:
-    proc = spawn_clients(urls, cookie, mode, n)
+def wait_connected(proc: subprocess.Popen) -> None:
     assert proc.stdout is not None
-    cpu0 = t0 = 0.0
     for line in proc.stdout:
-        if line.startswith("measuring"):
-            cpu0, t0 = cpu_seconds(server_pids), time.monotonic()
-        elif line.startswith("measured"):
-            cpu = (cpu_seconds(server_pids) - cpu0) / (time.monotonic() - t0) * 100
-        elif line.startswith("RESULT "):
-            result = json.loads(line[7:])
-            result["cpu_pct"] = cpu
-            proc.wait(30)
-            return result
+        if line.startswith("connected"):
+            return
     raise RuntimeError(f"client process ended with {proc.wait()}")
+
+
+def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int]) -> dict:
+    """N clients: one client process per web process (each its share), one measuring window for all."""
+    procs = [spawn_clients([url], cookie, mode, n // len(urls) + (i < n % len(urls))) for i, url in enumerate(urls)]
+    for proc in procs:
+        wait_connected(proc)
+    start = time.time() + WARMUP_S
+    for proc in procs:
+        assert proc.stdin is not None
+        proc.stdin.write(f"{start!r}\n")
+        proc.stdin.flush()
+    time.sleep(max(0.0, start - time.time()))
+    cpu0, t0 = cpu_seconds(server_pids), time.monotonic()
+    time.sleep(MEASURE_S)
+    cpu = (cpu_seconds(server_pids) - cpu0) / (time.monotonic() - t0) * 100
+    merged: dict = {"failed": 0, "samples": [], "cpu_pct": cpu}
+    for proc in procs:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            if line.startswith("RESULT "):
+                result = json.loads(line[7:])
+                merged["failed"] += result["failed"]
+                merged["samples"] += result["samples"]
+                merged["window"] = result["window"]
+        proc.wait(30)
+    return merged
 
 
 def idle_memory(url: str, cookie: str, pid: int) -> float:
     before = rss_kb(pid)
     proc = spawn_clients([url], cookie, "idle", IDLE_SOCKETS)
-    assert proc.stdout is not None and proc.stdin is not None
-    for line in proc.stdout:
-        if line.startswith("connected"):
-            break
+    wait_connected(proc)
     time.sleep(1.0)
     after = rss_kb(pid)
-    proc.stdin.write("\n")
+    assert proc.stdin is not None
+    proc.stdin.write("0\n")
     proc.stdin.flush()
     proc.wait(60)
     return (after - before) / IDLE_SOCKETS
