@@ -74,9 +74,11 @@ def latencies_ms(frames: list[Frame]) -> list[tuple[float, float]]:
     out = []
     for now, raw in frames:
         frame = json.loads(raw)
-        if frame.get("kind") == "update" and frame.get("key") == "odom":
-            stamp = frame["msg"]["header"]["stamp"]
-            out.append(((now - stamp["secs"] - stamp["nsecs"] / 1e9) * 1000, (now - frame["t"]) * 1000))
+        updates = frame.get("updates") or ([frame] if frame.get("kind") == "update" else [])
+        for update in updates:
+            if update.get("key") == "odom":
+                stamp = update["msg"]["header"]["stamp"]
+                out.append(((now - stamp["secs"] - stamp["nsecs"] / 1e9) * 1000, (now - update["t"]) * 1000))
     return out
 
 
