@@ -67,16 +67,15 @@ INSTALLED_APPS = [
     "history",
 ]
 
-# Django's middleware, subclassed to run on the event loop for async views (cyborg_site.middleware).
 MIDDLEWARE = [
-    "cyborg_site.middleware.SecurityMiddleware",
+    "django.middleware.security.SecurityMiddleware",
     "cyborg_site.staticfiles.AsyncWhiteNoiseMiddleware",
-    "cyborg_site.middleware.SessionMiddleware",
-    "cyborg_site.middleware.CommonMiddleware",
-    "cyborg_site.middleware.CsrfViewMiddleware",
-    "cyborg_site.middleware.AuthenticationMiddleware",
-    "cyborg_site.middleware.MessageMiddleware",
-    "cyborg_site.middleware.XFrameOptionsMiddleware",
+    "django.contrib.sessions.middleware.SessionMiddleware",
+    "django.middleware.common.CommonMiddleware",
+    "django.middleware.csrf.CsrfViewMiddleware",
+    "django.contrib.auth.middleware.AuthenticationMiddleware",
+    "django.contrib.messages.middleware.MessageMiddleware",
+    "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",
     # Last: turns a lockout flagged during authentication into the lockout answer.
     "axes.middleware.AxesMiddleware",
@@ -269,7 +268,7 @@ CELERY_BEAT_SCHEDULE = {
 REST_FRAMEWORK = {
     "DEFAULT_AUTHENTICATION_CLASSES": [
         "rest_framework.authentication.SessionAuthentication",
-        "rest_framework.authentication.TokenAuthentication",
+        "robot.api.tokens.CachedTokenAuthentication",
     ],
     "DEFAULT_PERMISSION_CLASSES": ["rest_framework.permissions.IsAuthenticated"],
     "DEFAULT_PARSER_CLASSES": [

@@ -5,7 +5,7 @@ import pytest
 from django.test import AsyncClient
 from rest_framework.authtoken.models import Token
 
-from robot.api.common import CachedTokenAuthentication
+from robot.api.tokens import CachedTokenAuthentication
 
 pytestmark = pytest.mark.django_db
 
