@@ -301,7 +301,7 @@ def scaled_section() -> None:
     redis = subprocess.Popen(["redis-server", "--port", str(redis_port), "--save", "", "--appendonly", "no"],
                              stdout=subprocess.DEVNULL, start_new_session=True)
     try:
-        with Stack(env={"REDIS_URL": f"redis://127.0.0.1:{redis_port}/0"}, webs=2, robotlink=True) as stack:
+        with Stack(redis_url=f"redis://127.0.0.1:{redis_port}/0", webs=2) as stack:
             stack.wait_robot_online()
             cookie = login(stack, "vera")
             urls = [f"ws://127.0.0.1:{port}/ws/live/" for port in stack.web_ports]
@@ -309,7 +309,7 @@ def scaled_section() -> None:
             reference.start()
             reference.ready.wait(10)
             log.info("scaled: %d clients over two web processes", SCALED)
-            pids = [p.pid for p in stack.webs] + [stack.robotlink.pid]
+            pids = [p.pid for p in stack.webs] + [stack.link_proc.pid]
             result = drive(urls, cookie, "watch", SCALED, pids)
             figures = summarise(result, reference.stamps)
             print(f"scaled_{SCALED}_p50_ms: {figures['p50']:.1f}")

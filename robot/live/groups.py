@@ -28,6 +28,18 @@ AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its wo
 LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
 
 
+class SharedMessage(dict):
+    """A message every receiver of a group send may read but never changes.
+
+    The in-memory channel layer deep-copies a message for each channel; for a stream every
+    listener hears (the robot's microphone) those copies would cost the most. Other layers
+    serialise it as a dict.
+    """
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> SharedMessage:
+        return self
+
+
 class TopicUpdate(TypedDict):
     type: Literal["robot.update"]
     key: str

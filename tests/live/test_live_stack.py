@@ -73,13 +73,12 @@ def test_it_fans_out_scaled_through_one_redis_subscription_per_web_process():
     redis = subprocess.Popen(["redis-server", "--port", str(port), "--save", "", "--appendonly", "no"],
                              stdout=subprocess.DEVNULL, start_new_session=True)
     try:
-        env = {"REDIS_URL": f"redis://127.0.0.1:{port}/0"}
-        with Stack(env=env, webs=2, robotlink=True, users=False) as stack:
+        with Stack(redis_url=f"redis://127.0.0.1:{port}/0", webs=2, users=False) as stack:
             cookie = viewer_cookie(stack)
             stack.wait_robot_online()
 
             async def both() -> list[list[dict]]:
-                return await asyncio.gather(*(watch(f"ws://127.0.0.1:{p}/ws/live/", stack.url, cookie, 10)
+                return await asyncio.gather(*(watch(f"ws://127.0.0.1:{p}/ws/live/", f"http://127.0.0.1:{p}", cookie, 10)
                                               for p in stack.web_ports))
 
             for frames in asyncio.run(both()):
