@@ -22,8 +22,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 import aiohttp  # noqa: E402
+from _stats import quantile  # noqa: E402
+from commands import call  # noqa: E402
 
 from robot import interface as ri  # noqa: E402
 from tests.stack import PASSWORD, Stack  # noqa: E402
@@ -35,16 +38,7 @@ DURATION_S = 20.0
 SPEECH_N = 200
 
 
-def quantile(ordered: list[float], q: float) -> float:
-    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
 
-
-def call(url: str, body: dict | None = None, token: str = "") -> dict:
-    data = json.dumps(body).encode() if body is not None else None
-    req = urllib.request.Request(url, data=data, headers={"Content-Type": "application/json",
-                                                         **({"Authorization": f"Token {token}"} if token else {})})
-    with urllib.request.urlopen(req, timeout=10) as res:
-        return json.loads(res.read())
 
 
 async def hammer(url: str, token: str) -> tuple[int, list[float], int]:

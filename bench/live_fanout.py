@@ -34,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from _stats import quantile  # noqa: E402
 from websockets.asyncio.client import connect  # noqa: E402
 from websockets.exceptions import ConnectionClosed  # noqa: E402
 
@@ -237,9 +238,6 @@ def idle_memory(url: str, cookie: str, pid: int) -> float:
     return (after - before) / IDLE_SOCKETS
 
 
-def quantile(ordered: list[float], q: float) -> float:
-    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))] if ordered else float("nan")
-
 
 def summarise(result: dict, sent: list[float]) -> dict[str, float]:
     w0, w1 = result["window"]
@@ -263,6 +261,15 @@ def summarise(result: dict, sent: list[float]) -> dict[str, float]:
             "lost": 100.0 * lost / total if total else float("nan")}
 
 
+def report(prefix: str, result: dict, sent: list[float]) -> None:
+    figures = summarise(result, sent)
+    print(f"{prefix}_p50_ms: {figures['p50']:.1f}")
+    print(f"{prefix}_p99_ms: {figures['p99']:.1f}")
+    print(f"{prefix}_lost_pct: {figures['lost']:.2f}")
+    print(f"{prefix}_handshakes_failed: {result['failed']}")
+    print(f"{prefix}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+
+
 def embedded_section(sizes: tuple[int, ...]) -> None:
     from teleop_latency import login
 
@@ -279,12 +286,7 @@ def embedded_section(sizes: tuple[int, ...]) -> None:
         for n in sizes:
             log.info("embedded: %d clients through the product", n)
             result = drive([url], cookie, "watch", n, [stack.web.pid])
-            figures = summarise(result, reference.stamps)
-            print(f"fanout_{n}_p50_ms: {figures['p50']:.1f}")
-            print(f"fanout_{n}_p99_ms: {figures['p99']:.1f}")
-            print(f"fanout_{n}_lost_pct: {figures['lost']:.2f}")
-            print(f"fanout_{n}_handshakes_failed: {result['failed']}")
-            print(f"fanout_{n}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+            report(f"fanout_{n}", result, reference.stamps)
             log.info("embedded: %d clients straight to rosbridge", n)
             result = drive([f"ws://127.0.0.1:{stack.sim_port}"], "", "direct", n, [stack.sim_proc.pid])
             figures = summarise(result, reference.stamps)
@@ -311,12 +313,7 @@ def scaled_section() -> None:
             log.info("scaled: %d clients over two web processes", SCALED)
             pids = [p.pid for p in stack.webs] + [stack.link_proc.pid]
             result = drive(urls, cookie, "watch", SCALED, pids)
-            figures = summarise(result, reference.stamps)
-            print(f"scaled_{SCALED}_p50_ms: {figures['p50']:.1f}")
-            print(f"scaled_{SCALED}_p99_ms: {figures['p99']:.1f}")
-            print(f"scaled_{SCALED}_lost_pct: {figures['lost']:.2f}")
-            print(f"scaled_{SCALED}_handshakes_failed: {result['failed']}")
-            print(f"scaled_{SCALED}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+            report(f"scaled_{SCALED}", result, reference.stamps)
     finally:
         redis.terminate()
         redis.wait(5)

@@ -23,6 +23,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import aiohttp  # noqa: E402
+from _stats import quantile  # noqa: E402
 from teleop_latency import login  # noqa: E402
 
 from tests.stack import Stack  # noqa: E402
@@ -33,9 +34,6 @@ VIEWERS = 20
 WARMUP_S = 2.0
 MEASURE_S = 20.0
 
-
-def quantile(ordered: list[float], q: float) -> float:
-    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
 
 
 async def viewer(url: str, cookie: str, window: list[float], out: list[float]) -> None:
