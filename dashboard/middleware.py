@@ -1,4 +1,3 @@
-from asgiref.sync import sync_to_async
 from django.contrib.auth.middleware import LoginRequiredMiddleware as _DjangoLoginRequired
 
 # The API answers anonymous callers itself (401/403 JSON, token auth); static files and
@@ -7,11 +6,8 @@ _EXEMPT_PREFIXES = ("/api/", "/static/", "/admin/")
 
 
 class LoginRequiredMiddleware(_DjangoLoginRequired):
-    # Async, so that exempt paths (the API) skip the thread hop Django would add for a sync hook.
-    async def process_view(self, request, view_func, view_args, view_kwargs):
+    def process_view(self, request, view_func, view_args, view_kwargs):
         # Open views first: /healthz must not load the session (the database may be down).
         if request.path.startswith(_EXEMPT_PREFIXES) or not getattr(view_func, "login_required", True):
             return None
-        # Reading request.user may query the session and the user: in the sync thread.
-        return await sync_to_async(super().process_view, thread_sensitive=True)(
-            request, view_func, view_args, view_kwargs)
+        return super().process_view(request, view_func, view_args, view_kwargs)

@@ -14,16 +14,18 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from django.conf import settings
-from rest_framework.authentication import SessionAuthentication, TokenAuthentication
+from rest_framework.authentication import SessionAuthentication
 from rest_framework.decorators import api_view, authentication_classes, throttle_classes
 from rest_framework.request import Request
 from rest_framework.throttling import UserRateThrottle
 from rest_framework.views import APIView
 
+from robot.api.tokens import CachedTokenAuthentication
 from robot.commands.pipeline import Command, run_command
 
 # Token first: an anonymous caller gets 401 with ``WWW-Authenticate: Token`` (not a bare 403).
-API_AUTHENTICATION = [TokenAuthentication, SessionAuthentication]
+# Tokens are cached briefly (robot.api.tokens): a script polling the API costs no query per request.
+API_AUTHENTICATION = [CachedTokenAuthentication, SessionAuthentication]
 
 
 class CommandThrottle(UserRateThrottle):

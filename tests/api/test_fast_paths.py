@@ -1,8 +1,6 @@
-"""The read path without needless work: token lookups cached briefly, static files and async views
-without the shared sync thread."""
+"""The read path without needless work: token lookups cached briefly."""
 
 import pytest
-from django.test import AsyncClient
 from rest_framework.authtoken.models import Token
 
 from robot.api.tokens import CachedTokenAuthentication
@@ -38,10 +36,3 @@ def test_an_unknown_token_is_refused_and_not_cached(client):
     response = client.get("/api/robot/state/", headers={"Authorization": "Token nope"})
     assert response.status_code == 401
     assert not CachedTokenAuthentication._cache
-
-
-async def test_static_files_are_still_served_by_whitenoise():
-    response = await AsyncClient().get("/static/js/live.js")
-    assert response.status_code == 200
-    body = b"".join(response.streaming_content)  # a file: read by the server in a worker thread
-    assert b"WebSocket" in body
