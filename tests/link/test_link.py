@@ -14,7 +14,7 @@ BATTERY = "battery_soc"
 
 async def watch(user, *keys):
     communicator = ws_communicator(user)
-    connected, _ = await communicator.connect()
+    connected, _ = await communicator.connect(timeout=10)
     assert connected
     await communicator.send_json_to({"action": "watch", "keys": list(keys)})
     return communicator
