@@ -1,4 +1,5 @@
 import os
+from functools import partialmethod
 
 from django.core.asgi import get_asgi_application
 
@@ -7,6 +8,7 @@ django_asgi_app = get_asgi_application()
 
 from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
+from daphne.http_protocol import WebRequest  # noqa: E402
 from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
@@ -23,5 +25,8 @@ application = ProtocolTypeRouter(
 # Same autobahn ordering issue as the robot link (robot/link/connection.py): without a class default,
 # browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
 WebSocketProtocol.tcpNoDelay = True
+# Twisted parses POSTed form bodies itself (Daphne never reads the result) and answers a body it
+# cannot parse with a bare, empty 400 before Django sees it; let Django give its usual error.
+WebRequest.__init__ = partialmethod(WebRequest.__init__, parsePOSTFormSubmission=False)
 
 autostart_in_daphne()

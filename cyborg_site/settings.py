@@ -273,8 +273,8 @@ REST_FRAMEWORK = {
     "DEFAULT_PERMISSION_CLASSES": ["rest_framework.permissions.IsAuthenticated"],
     "DEFAULT_PARSER_CLASSES": [
         "robot.api.errors.BoundedJSONParser",
-        "rest_framework.parsers.FormParser",
-        "rest_framework.parsers.MultiPartParser",
+        "robot.api.errors.PolicyFormParser",
+        "robot.api.errors.PolicyMultiPartParser",
     ],
     "DEFAULT_RENDERER_CLASSES": [
         "robot.api.errors.SafeJSONRenderer",

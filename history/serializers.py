@@ -86,17 +86,24 @@ class SeriesOut(serializers.Serializer):
     count = serializers.ListField(child=serializers.IntegerField())
 
 
+# Physical ranges of a policy: sampling at most once a day, kept at most ten years.
+INTERVAL_MAX_S = 86_400.0
+RETENTION_MAX_S = 10 * 365 * 86_400.0
+MESSAGE_BYTES_MAX = 64 * 1024 * 1024
+
+
 class PolicyIn(serializers.Serializer):
     topic = serializers.CharField(max_length=255)
     msg_type = serializers.CharField(max_length=255, required=False, allow_blank=True)
     mode = serializers.ChoiceField(choices=Mode.choices, required=False)
-    interval_s = serializers.FloatField(required=False, allow_null=True, min_value=0.05)
-    retention_s = serializers.FloatField(required=False, allow_null=True, min_value=1)
-    max_message_bytes = serializers.IntegerField(required=False, allow_null=True, min_value=1)
+    interval_s = serializers.FloatField(required=False, allow_null=True, min_value=0.05, max_value=INTERVAL_MAX_S)
+    retention_s = serializers.FloatField(required=False, allow_null=True, min_value=1, max_value=RETENTION_MAX_S)
+    max_message_bytes = serializers.IntegerField(required=False, allow_null=True, min_value=1,
+                                                 max_value=MESSAGE_BYTES_MAX)
 
 
 class PoliciesPatch(serializers.Serializer):
-    default_interval_s = serializers.FloatField(required=False, min_value=0.05)
+    default_interval_s = serializers.FloatField(required=False, min_value=0.05, max_value=INTERVAL_MAX_S)
     topics = PolicyIn(many=True, required=False)
 
 

@@ -17,7 +17,7 @@ from django.http import JsonResponse
 from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeout
 from rest_framework import exceptions, status
-from rest_framework.parsers import JSONParser
+from rest_framework.parsers import FormParser, JSONParser, MultiPartParser
 from rest_framework.renderers import JSONRenderer
 from rest_framework.response import Response
 from rest_framework.views import exception_handler
@@ -141,6 +141,19 @@ def body_problem(data: Any) -> tuple[str, str] | None:
     return None
 
 
+def refuse_bad_body(data: Any) -> None:
+    problem = body_problem(data)
+    if problem:
+        field, reason = problem
+        raise exceptions.ValidationError({field: [reason]})
+
+
+def refuse_bad_form(data: Any) -> None:
+    for name, values in data.lists():
+        for value in values:
+            refuse_bad_body({name: value})
+
+
 class BoundedJSONParser(JSONParser):
     """DRF's JSON parser, refusing (400) deep nesting instead of recursing to death, and text
     the site's text policy never accepts, naming where it is."""
@@ -150,11 +163,24 @@ class BoundedJSONParser(JSONParser):
             data = super().parse(stream, media_type, parser_context)
         except RecursionError:
             raise exceptions.ParseError(f"JSON nested too deeply (at most {MAX_JSON_DEPTH} levels).") from None
-        problem = body_problem(data)
-        if problem:
-            field, reason = problem
-            raise exceptions.ValidationError({field: [reason]})
+        refuse_bad_body(data)
         return data
+
+
+class PolicyFormParser(FormParser):
+    """Form bodies under the same text policy as JSON ones."""
+
+    def parse(self, stream, media_type=None, parser_context=None):
+        data = super().parse(stream, media_type, parser_context)
+        refuse_bad_form(data)
+        return data
+
+
+class PolicyMultiPartParser(MultiPartParser):
+    def parse(self, stream, media_type=None, parser_context=None):
+        parsed = super().parse(stream, media_type, parser_context)
+        refuse_bad_form(parsed.data)
+        return parsed
 
 
 class SafeJSONRenderer(JSONRenderer):

@@ -5,14 +5,23 @@ from __future__ import annotations
 from asgiref.sync import async_to_sync
 from rest_framework import serializers
 
+from robot.api.validation import reject_unknown
 from robot.models import Location
 from robot.navigation.locations import acurrent_pose
+from robot.navigation.validation import YAW_LIMIT
+
+# Named locations are on a building's map: coordinates within 10 km, arrival radius within 100 m.
+COORDINATE_LIMIT_M = 10_000.0
+THRESHOLD_MAX_M = 100.0
+_COORDINATE = {"required": False, "min_value": -COORDINATE_LIMIT_M, "max_value": COORDINATE_LIMIT_M,
+               "help_text": f"metres, map frame, within ±{COORDINATE_LIMIT_M:g}"}
 
 
 class PoseInput(serializers.Serializer):
-    x = serializers.FloatField(help_text="metres, map frame")
-    y = serializers.FloatField(help_text="metres, map frame")
-    yaw = serializers.FloatField(required=False, default=0.0, help_text="heading in radians (0 = +x, CCW)")
+    x = serializers.FloatField(help_text="metres, map frame; must be on the latest map")
+    y = serializers.FloatField(help_text="metres, map frame; must be on the latest map")
+    yaw = serializers.FloatField(required=False, default=0.0, min_value=-YAW_LIMIT, max_value=YAW_LIMIT,
+                                 help_text="heading in radians within (-2π, 2π] (0 = +x, CCW)")
 
 
 class MapOrigin(serializers.Serializer):
@@ -73,7 +82,20 @@ class LocationSerializer(serializers.ModelSerializer):
     class Meta:
         model = Location
         fields = ("name", "map_name", "x", "y", "yaw", "threshold", "description", "use_current_pose")
-        extra_kwargs = {"x": {"required": False}, "y": {"required": False}}
+        extra_kwargs = {"x": _COORDINATE, "y": _COORDINATE,
+                        "yaw": {"min_value": -YAW_LIMIT, "max_value": YAW_LIMIT,
+                                "help_text": "heading in radians within (-2π, 2π]"},
+                        "threshold": {"max_value": THRESHOLD_MAX_M, "help_text": "arrival radius, metres"}}
+
+    def to_internal_value(self, data):
+        if isinstance(data, dict):
+            reject_unknown(data, [name for name, field in self.fields.items() if not field.read_only])
+        return super().to_internal_value(data)
+
+    def validate_yaw(self, value: float) -> float:
+        if value <= -YAW_LIMIT:
+            raise serializers.ValidationError("must be within (-2π, 2π]")
+        return value
 
     def validate(self, attrs):
         if attrs.pop("use_current_pose", False):

@@ -65,7 +65,15 @@ def test_it_refuses_bad_text_with_the_field_and_never_sends_it(operator_api, rob
     assert only_the_marker_arrived(robot, operator_api), sent_to_robot(robot)
 
 
-def test_it_refuses_too_long_speech_over_the_live_command_path():
+@pytest.mark.django_db
+def test_it_applies_the_policy_to_form_bodies_too(operator_api):
+    res = operator_api.post("/api/locations/", {"name": "dock", "x": "1", "y": "1", "description": "a\x1bb"})
+    assert res.status_code == 400 and res.json()["field"] == "description", res.content
+    res = operator_api.post("/api/robot/speech/", {"text": "hi\x07"}, format="multipart")
+    assert res.status_code == 400 and res.json()["field"] == "text", res.content
+
+
+def test_it_refuses_control_characters_over_the_live_command_path():
     from robot.commands.pipeline import InvalidCommand
     from robot.commands.validation import clean_speech
 

@@ -1,0 +1,33 @@
+"""Fuzz the live API from its OpenAPI schema (schemathesis), as an operator and as a viewer.
+
+Run: .venv/bin/python bench/fuzz.py  (starts its own simulator + Daphne; a few minutes)
+Prints fuzz_requests, fuzz_server_errors, fuzz_schema_violations, fuzz_viewer_writes (all but
+the first must be 0) and the first problems found, if any.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from tests.fuzzing import fuzz_api
+from tests.stack import PASSWORD, Stack
+
+EXAMPLES_PER_OPERATION = 25
+
+
+def main() -> int:
+    with Stack() as stack:
+        stack.wait_robot_online()
+        report = fuzz_api(stack.url, operator=("otto", PASSWORD), viewer=("vera", PASSWORD),
+                          max_examples=EXAMPLES_PER_OPERATION)
+    print("\n".join(report.lines()))
+    for problem in report.problems[:10]:
+        print(problem, file=sys.stderr)
+    return 0 if report.server_errors == report.schema_violations == report.viewer_writes == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
