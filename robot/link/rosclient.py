@@ -5,11 +5,13 @@ which inside Daphne is the web server's event loop. A 4000 x 4000 map would stal
 page and websocket for most of a second. ``LinkRos`` is ``roslibpy.Ros`` with a protocol
 that sends frames of ``LARGE_FRAME_BYTES`` and more to one decoding thread (so they stay
 in order) and hands the decoded message back to roslibpy's own dispatch on the reactor.
-It also turns Nagle off on the rosbridge socket (see ``tcpNoDelay``).
+It also turns Nagle off on the rosbridge socket (see ``tcpNoDelay``), and replaces lone UTF-16
+surrogates in the robot's text (they break every UTF-8 encoder downstream) with U+FFFD.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -19,7 +21,8 @@ import roslibpy
 from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 from roslibpy.core import Message
 
-from robot.link.wire import LARGE_FRAME_BYTES, decode_frame
+from cyborg_site.text import scrub_json
+from robot.link.wire import LARGE_FRAME_BYTES, decode_frame, may_hold_surrogates
 
 log = logging.getLogger(__name__)
 
@@ -39,7 +42,10 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
 
     def on_message(self, payload: bytes) -> None:
         if len(payload) < LARGE_FRAME_BYTES:
-            super().on_message(payload)
+            if may_hold_surrogates(payload):
+                self._dispatch(Message(scrub_json(json.loads(payload))))
+            else:
+                super().on_message(payload)
         else:
             log.info("received a %.1f MB frame in %.0f ms; decoding it off the event loop",
                      len(payload) / 1e6, (time.perf_counter() - self._began) * 1000)
@@ -47,7 +53,8 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
 
     def _decode_large(self, payload: bytes, array_topics: frozenset[str]) -> None:
         try:
-            message = Message(decode_frame(payload, array_topics=array_topics))
+            frame = decode_frame(payload, array_topics=array_topics)
+            message = Message(scrub_json(frame) if may_hold_surrogates(payload) else frame)
         except ValueError:
             log.exception("dropped an undecodable %d-byte frame from rosbridge", len(payload))
             return
@@ -63,7 +70,7 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
         try:
             handler(message)
         except Exception:
-            log.exception("handling a large %r frame failed", message.get("op"))
+            log.exception("handling a %r frame failed", message.get("op"))
 
 
 class LinkRos(roslibpy.Ros):

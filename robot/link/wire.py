@@ -26,6 +26,15 @@ _INT_CHARS = b"0123456789,- \t\r\n"
 _SENTINEL = "\x00cyborg-int-array\x00"
 
 
+# A JSON \uD800-\uDFFF escape: the only way a lone surrogate can arrive in valid UTF-8.
+_SURROGATE_ESCAPE = re.compile(rb"\\u[dD][89abcdefABCDEF]")
+
+
+def may_hold_surrogates(payload: bytes) -> bool:
+    """Whether decoding ``payload`` may give text with a (lone) UTF-16 surrogate."""
+    return _SURROGATE_ESCAPE.search(payload) is not None
+
+
 def decode_frame(payload: bytes, *, array_topics: frozenset[str] = frozenset()) -> dict[str, Any]:
     """The frame as a dict. Its big integer ``data`` array is an ndarray if the frame's topic is
     in ``array_topics`` (their handlers take arrays), else the same list ``json`` would give."""
