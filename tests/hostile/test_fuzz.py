@@ -38,6 +38,6 @@ def test_fuzzing_the_live_api_finds_no_server_error_schema_violation_or_viewer_w
         assert (status, content_type) == (400, "application/json"), body
         assert json.loads(body)["field"] == "text"
         report = fuzz_api(stack.url, operator=("otto", PASSWORD), viewer=("vera", PASSWORD), max_examples=1)
-    assert report.requests > 100, report.lines()
+    assert report.requests > 60, report.lines()  # every operation, more than once
     assert (report.server_errors, report.schema_violations, report.viewer_writes) == (0, 0, 0), \
         "\n".join(report.problems[:20])
