@@ -15,6 +15,7 @@ from django.db import connection
 
 from robot.api.errors import UNAVAILABLE_TEXT, unavailable
 from robot.live.state import link_status
+from robot.supervisor import failing
 
 PING_TIMEOUT_S = 1.0
 
@@ -53,7 +54,22 @@ def check_redis() -> Check | None:
     return Check("redis", True)
 
 
-CHECKS: list[Callable[[], Check | None]] = [check_database, check_redis]
+def check_command_path() -> Check | None:
+    """A link that runs but does not answer its ping over the request channel (robot.link.hosting)."""
+    try:
+        status = link_status()
+    except Exception as exc:
+        if not unavailable(exc):
+            raise
+        return Check("command_path", False, f"Command path down: the request channel is unreachable ({exc})")
+    if not status.get("link_running"):
+        return None  # no link reports at all: "link_running" says so
+    if not status["command_path"]:
+        return Check("command_path", False, "Command path down: the robot link does not answer requests")
+    return Check("command_path", True)
+
+
+CHECKS: list[Callable[[], Check | None]] = [check_database, check_redis, check_command_path]
 
 
 def health_report() -> dict[str, Any]:
@@ -67,5 +83,6 @@ def health_report() -> dict[str, Any]:
     # The robot being offline is reported, not a failure of this server.
     status = link_status() if "redis" not in down else {"connected": False, "url": settings.ROSBRIDGE_URL}
     report.update(connected=bool(status["connected"]), link_running=bool(status.get("link_running", False)),
-                  robot_url=status.get("url") or "")
+                  command_path=bool(status.get("command_path", False)), robot_url=status.get("url") or "",
+                  failing_tasks=[*status.get("failing_tasks", []), *failing()])
     return report

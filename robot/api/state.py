@@ -25,7 +25,10 @@ class RobotStateView(RobotAPIView):
         description="Link status, the latest value of every dashboard topic with its age, the events "
                     "available from the current state, and the last requested mode against the state reached.",
         responses={200: inline_serializer("RobotState", {
-            "connected": serializers.BooleanField(),
+            "connected": serializers.BooleanField(help_text="A command can reach the robot: the robot is "
+                                                  "connected and the link answers requests."),
+            "command_path": serializers.BooleanField(help_text='False: "command path down", the robot link does '
+                                                     "not answer requests (nothing would reach the robot)."),
             "link": serializers.DictField(),
             "values": serializers.DictField(child=_Value),
             "available_events": serializers.DictField(child=serializers.CharField()),

@@ -48,6 +48,7 @@ async def arobot_state() -> dict[str, Any]:
     }
     return {
         "connected": bool(link["connected"]),
+        "command_path": bool(link["command_path"]),
         "link": link,
         "values": values,
         "available_events": available_events(entries.get("state_transitions")),

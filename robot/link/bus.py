@@ -8,7 +8,6 @@ deadline: if the link gets it too late it is dropped, never fired later.
 from __future__ import annotations
 
 import asyncio
-import json
 import time
 import uuid
 import weakref
@@ -17,9 +16,11 @@ from typing import Any
 from asgiref.sync import async_to_sync
 from channels.layers import get_channel_layer
 from django.conf import settings
+from redis.exceptions import RedisError
 
 from robot import interface as ri
 from robot.link import connection as link_module
+from robot.link import redisqueue
 from robot.link.connection import RobotLink
 from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, STATUS_KEY, LinkReply, LinkRequest
 from robot.live.state import get_store, redis_key, status_view
@@ -42,6 +43,13 @@ class RobotOffline(RobotError):
     code = "offline"
 
 
+class CommandPathDown(RobotError):
+    """The request channel to the link (Redis) failed: nothing reached the robot."""
+
+    status_code = 503
+    code = "command_path"
+
+
 class RobotTimeout(RobotError):
     status_code = 504
     code = "timeout"
@@ -58,18 +66,33 @@ _ERRORS: dict[str, type[RobotError]] = {"offline": RobotOffline, "timeout": Robo
 
 
 async def _is_online() -> bool:
+    """False only when the link says the robot is offline; without a word from the link (a
+    store that just came back empty) the request is tried and the link answers for itself."""
     status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
-    return bool(status_view(status)["connected"])
+    return status is None or bool(status_view(status)["robot_connected"])
+
+
+def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
+    return {
+        "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
+        # The link may need most of the timeout for a service call; leave room for the reply.
+        "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
+    }
+
+
+async def aping_over_layer(timeout: float) -> bool:
+    """Does the link answer over the request channel (never the in-process shortcut)?"""
+    try:
+        reply = await asyncio.wait_for(_via_layer(_new_request("ping", timeout, {})), timeout)
+    except Exception:
+        return False
+    return bool(reply.get("ok"))
 
 
 async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> LinkReply:
     """Send one request to the link and wait for its reply; raise RobotError on failure."""
     timeout = timeout or settings.ROBOT_REQUEST_TIMEOUT_S
-    request: LinkRequest = {
-        "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
-        # The link may need most of the timeout for a service call; leave room for the reply.
-        "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
-    }
+    request = _new_request(op, timeout, fields)
     hosted = link_module.current
     try:
         if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
@@ -79,7 +102,9 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
                 raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
             reply = await asyncio.wait_for(_via_layer(request), timeout)
     except TimeoutError:
-        raise RobotTimeout(f"The robot link did not answer in {timeout:g} s") from None
+        raise RobotTimeout(f"Command path down? The robot link did not answer in {timeout:g} s") from None
+    except (OSError, RedisError) as exc:
+        raise CommandPathDown(f"Command path down: the request channel to the robot link failed ({exc})") from None
     if not reply.get("ok"):
         raise _ERRORS.get(reply.get("error_code", ""), RobotError)(reply.get("error", "The robot refused the command"))
     return reply
@@ -94,24 +119,19 @@ async def _direct(hosted: RobotLink, request: LinkRequest) -> LinkReply:
 
 
 class _Replies:
-    """Where the link's replies come back to this process: one key (a Redis list when scaled,
-    a channel of the in-memory layer otherwise), read by one supervised task that hands each
-    reply to its waiting request. A receive per request on the Redis channel layer lost
-    replies while the process's consumers received too (teleop stalled after 0.1 s)."""
+    """Where the link's replies come back to this process: a Redis list of its own when
+    scaled (robot.link.redisqueue), a channel of the in-memory layer otherwise; read by one
+    supervised task that hands each reply to the request waiting for it."""
 
     def __init__(self, layer: Any) -> None:
         self.layer = layer
         self.address = ""
         self.waiting: dict[str, asyncio.Future] = {}
         self._task: asyncio.Task | None = None
-        self._redis: Any = None
 
     async def reply_to(self) -> str:
         if not self.address:
             if settings.REDIS_URL:
-                import redis.asyncio
-
-                self._redis = redis.asyncio.Redis.from_url(settings.REDIS_URL)
                 self.address = REPLY_LIST_PREFIX + redis_key(f"link-replies:{uuid.uuid4().hex}")
             else:
                 self.address = await self.layer.new_channel("robot-reply.")
@@ -120,13 +140,11 @@ class _Replies:
         return self.address
 
     async def _receive(self) -> None:
-        key = self.address.removeprefix(REPLY_LIST_PREFIX)
         while True:
-            if self._redis is not None:
-                popped = await self._redis.blpop([key], timeout=1)
-                if popped is None:
+            if self.address.startswith(REPLY_LIST_PREFIX):
+                reply = await redisqueue.pop(self.address.removeprefix(REPLY_LIST_PREFIX))
+                if reply is None:
                     continue
-                reply = json.loads(popped[1])
             else:
                 reply = await self.layer.receive(self.address)
             future = self.waiting.pop(reply.get("request_id", ""), None)
@@ -138,6 +156,7 @@ _replies: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, _Replies] = weakr
 
 
 async def _via_layer(request: LinkRequest) -> LinkReply:
+    """Send a request to the link and wait for its reply (the channel layer embedded, Redis lists scaled)."""
     layer = get_channel_layer()
     loop = asyncio.get_running_loop()
     replies = _replies.get(loop)
@@ -146,7 +165,10 @@ async def _via_layer(request: LinkRequest) -> LinkReply:
     request["reply_to"] = await replies.reply_to()
     future = replies.waiting[request["request_id"]] = loop.create_future()
     try:
-        await layer.send(LINK_CHANNEL, request)
+        if settings.REDIS_URL:
+            await redisqueue.push(redisqueue.requests_key(), dict(request))
+        else:
+            await layer.send(LINK_CHANNEL, request)
         return await future
     finally:
         replies.waiting.pop(request["request_id"], None)

@@ -9,19 +9,18 @@ and nothing in a callback blocks.
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 import time
-import weakref
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
 import roslibpy
 
 from robot import interface as ri
+from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos
-from robot.live.announce import aannounce, aannounce_status
+from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.fanout import Coalescer
 from robot.live.groups import (
     LATCH_KEY,
@@ -33,6 +32,7 @@ from robot.live.groups import (
     TopicUpdate,
 )
 from robot.live.state import LINK_HEARTBEAT_S, StateStore
+from robot.supervisor import failing, supervise
 
 log = logging.getLogger(__name__)
 
@@ -81,6 +81,7 @@ class RobotLink:
         max_backoff_s: float = 10.0,
         service_timeout_s: float = 5.0,
         guard_settings: dict[str, float] | None = None,
+        request_queue: str = "",
     ) -> None:
         self.url = url
         self.store = store
@@ -103,6 +104,9 @@ class RobotLink:
         self._inflight: set[asyncio.Future] = set()
         self._guard_settings = guard_settings or {"rate_hz": 10.0, "hold_s": 1.0, "deadman_s": 0.35}
         self.guard: CmdVelGuard | None = None
+        self.request_queue = request_queue  # scaled: requests arrive on this Redis list (robot.link.redisqueue)
+        self.command_path = True  # until a ping over the request channel goes unanswered
+        self._latch_msg: dict[str, Any] = {}
 
     # --- lifecycle -------------------------------------------------------------------
 
@@ -126,16 +130,16 @@ class RobotLink:
             self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)
         for t in self.topics:
             self.subscribe(t.name, t.type)
-        self._tasks.append(asyncio.ensure_future(self._heartbeat()))
+        self._tasks.append(supervise("link.heartbeat", self._heartbeat))
         if serve_requests:
-            self._serving = asyncio.ensure_future(self._serve())
+            self._serving = supervise("link.requests", self._serve)
             self._tasks.append(self._serving)
-        await self._publish_status()
+        await self.publish_status()
 
     async def stop(self) -> None:
         """Stop within a few seconds whatever the network does (every wait is bounded)."""
         self._stopped = True
-        if self._serving is not None:
+        if self._serving is not None and not self.request_queue:
             # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
             try:
                 await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
@@ -225,7 +229,7 @@ class RobotLink:
             return
         self.connected, self.since, self.attempts = True, time.time(), 0
         log.info("robot link connected to %s", self.url)
-        self._spawn(self._publish_status())
+        self._spawn(self.publish_status())
 
     def _on_close(self) -> None:
         if self._stopped:
@@ -235,15 +239,23 @@ class RobotLink:
             self.since = time.time()
         self.connected = False
         self.attempts += 1
-        self._spawn(self._publish_status())
+        self._spawn(self.publish_status())
 
     def status(self) -> LinkStatus:
         return {
             "type": "robot.status", "connected": self.connected, "url": self.url,
             "since": self.since, "attempts": self.attempts, "link_alive": time.time(),
+            "command_path": self.command_path, "failing_tasks": failing(),
         }
 
-    async def _publish_status(self) -> None:
+    async def set_command_path(self, ok: bool) -> None:
+        """What the last ping over the request channel found; a change is published at once."""
+        if ok != self.command_path:
+            (log.info if ok else log.error)("command path %s", "answers again" if ok else "DOWN: a ping got no answer")
+            self.command_path = ok
+            await self.publish_status()
+
+    async def publish_status(self) -> None:
         status = self.status()
         try:
             await aannounce_status(dict(status), store=self.store)
@@ -257,16 +269,24 @@ class RobotLink:
             if self.ros is not None and not self.connected:
                 self.attempts = max(self.attempts, getattr(self.ros.factory, "retries", 0))
             await self._sync_latch()
-            await self._publish_status()
+            await self.publish_status()
 
     async def _sync_latch(self) -> None:
+        """Follow the shared latch; if the store lost it (Redis restarted empty) while this link
+        holds a stop, write it back: a latch ends only by an operator's release."""
         try:
             entry = (await self.store.aget_many([LATCH_KEY])).get(LATCH_KEY)
+            if self.guard is None:
+                return
+            if entry is not None:
+                self._latch_msg = dict(entry.get("msg") or {})
+                self.guard.sync(bool(self._latch_msg.get("latched")))
+            elif self.guard.latched:
+                log.warning("the shared store lost the E-STOP latch: writing it back")
+                msg = self._latch_msg if self._latch_msg.get("latched") else {"latched": True}
+                await aannounce(LATCH_KEY, dict(server_update(LATCH_KEY, msg)), store=self.store, layer=self.layer)
         except Exception:
             log.exception("could not read the E-STOP latch")
-            return
-        if self.guard is not None:
-            self.guard.sync(bool(entry and entry.get("msg", {}).get("latched")))
 
     def reconnect(self) -> None:
         """Try now instead of waiting out the backoff (the page's reconnect button)."""
@@ -295,7 +315,12 @@ class RobotLink:
 
     async def _serve(self) -> None:
         while not self._stopped:
-            request = await self.layer.receive(LINK_CHANNEL)
+            if self.request_queue:
+                request = await redisqueue.pop(self.request_queue)
+                if request is None:
+                    continue
+            else:
+                request = await self.layer.receive(LINK_CHANNEL)
             if request.get("type") == "link.stop":
                 if self._stopped:
                     return
@@ -310,7 +335,7 @@ class RobotLink:
         reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
         reply_to = request.get("reply_to") or ""
         if reply_to.startswith(REPLY_LIST_PREFIX):
-            await _push_reply(reply_to.removeprefix(REPLY_LIST_PREFIX), reply)
+            await redisqueue.push(reply_to.removeprefix(REPLY_LIST_PREFIX), dict(reply))
         elif reply_to:
             await self.layer.send(reply_to, reply)
 
@@ -391,21 +416,6 @@ async def _cancel_within(tasks: list, timeout: float) -> None:
         _, pending = await asyncio.wait(tasks, timeout=timeout)
         if pending:
             log.warning("%d robot link task(s) did not stop within %g s", len(pending), timeout)
-
-
-_reply_clients: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, Any] = weakref.WeakKeyDictionary()
-
-
-async def _push_reply(key: str, reply: LinkReply) -> None:
-    import redis.asyncio
-    from django.conf import settings
-
-    loop = asyncio.get_running_loop()
-    client = _reply_clients.get(loop)
-    if client is None:
-        client = _reply_clients[loop] = redis.asyncio.Redis.from_url(settings.REDIS_URL)
-    async with client.pipeline(transaction=False) as pipe:
-        await pipe.rpush(key, json.dumps(reply, default=str)).expire(key, 60).execute()
 
 
 def _close_quietly(ros: roslibpy.Ros) -> None:

@@ -7,6 +7,7 @@ process itself, so both run the same code.
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
 import sys
 from collections.abc import Awaitable, Callable
@@ -15,10 +16,16 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot.link import connection as link_module
+from robot.link import redisqueue
+from robot.link.bus import aping_over_layer
 from robot.link.connection import RobotLink
 from robot.live.state import get_store
+from robot.supervisor import supervise
 
 log = logging.getLogger(__name__)
+
+PROBE_INTERVAL_S = 1.0
+PROBE_TIMEOUT_S = 1.0
 
 # Other apps add background loops that must run where the link runs (e.g. history sampling
 # in the embedded default). Each gets the link and runs until cancelled.
@@ -38,13 +45,15 @@ async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotL
         layer=get_channel_layer(),
         max_backoff_s=settings.ROBOT_LINK_MAX_BACKOFF_S,
         service_timeout_s=settings.ROBOT_REQUEST_TIMEOUT_S,
+        request_queue=redisqueue.requests_key() if settings.REDIS_URL else "",
         guard_settings={"rate_hz": settings.TELEOP_RATE_HZ, "hold_s": settings.ESTOP_HOLD_S,
                         "deadman_s": settings.TELEOP_LINK_DEADMAN_S},
     )
     await link.start()
     link_module.current = link
-    tasks = [
-        asyncio.ensure_future(_run_forever(name, service, link))
+    tasks = [supervise("link.command-path", functools.partial(probe_command_path, link))]
+    tasks += [
+        supervise(f"background.{name}", functools.partial(service, link))
         for name, service, embedded_only in _background
         if background and (embedded or not embedded_only)
     ]
@@ -52,16 +61,12 @@ async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotL
     return link, tasks
 
 
-async def _run_forever(name: str, service: BackgroundService, link: RobotLink) -> None:
+async def probe_command_path(link: RobotLink) -> None:
+    """Ping the link over the request channel every web process uses, and say what it found
+    in the link's status: a dead request loop or channel layer shows as "command path down"."""
     while True:
-        try:
-            await service(link)
-            return
-        except asyncio.CancelledError:
-            raise
-        except Exception:
-            log.exception("background service %s failed; restarting in 5 s", name)
-            await asyncio.sleep(5)
+        await link.set_command_path(await aping_over_layer(PROBE_TIMEOUT_S))
+        await asyncio.sleep(PROBE_INTERVAL_S)
 
 
 def autostart_in_daphne() -> None:

@@ -56,6 +56,8 @@ class LinkStatus(TypedDict):
     since: float  # epoch seconds of the last change
     attempts: int  # connection attempts since the last drop
     link_alive: float  # epoch seconds of the link's last heartbeat
+    command_path: bool  # the link answered its last ping over the request channel
+    failing_tasks: list[str]  # the link process's supervised tasks waiting to restart
 
 
 class LinkRequest(TypedDict, total=False):

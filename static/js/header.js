@@ -16,6 +16,11 @@ document.addEventListener("click", (ev) => { if (!header.contains(ev.target)) se
 live.onStatus((status) => {
   if (!pill) return;
   pill.className = `pill ${status.connected ? "pill-ok" : "pill-bad"}`;
-  pill.textContent = status.connected ? "robot online" : (status.link_running === false ? "link down" : "robot offline");
-  pill.title = status.url || "";
+  // "Command path down": the link runs but does not answer requests; nothing would reach the robot.
+  pill.textContent = status.connected ? "robot online" : status.link_running === false ? "link down"
+    : status.command_path === false ? "command path down" : "robot offline";
+  pill.dataset.state = pill.textContent;
+  pill.title = status.command_path === false
+    ? "The robot link does not answer requests: commands, including E-STOP, cannot reach the robot"
+    : status.url || "";
 });
