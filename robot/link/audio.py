@@ -16,6 +16,7 @@ import base64
 import binascii
 import logging
 import time
+import weakref
 from typing import Any
 
 import roslibpy
@@ -56,11 +57,13 @@ class Listeners:
             self.link.unsubscribe(self.topic.name)
 
 
+_listeners: weakref.WeakKeyDictionary[RobotLink, Listeners] = weakref.WeakKeyDictionary()
+
+
 def listeners_of(link: RobotLink) -> Listeners:
-    found = getattr(link, "audio_listeners", None)
+    found = _listeners.get(link)
     if found is None:
-        found = Listeners(link)
-        link.audio_listeners = found  # type: ignore[attr-defined]
+        found = _listeners[link] = Listeners(link)
     return found
 
 
