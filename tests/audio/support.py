@@ -56,7 +56,8 @@ class Frames:
         await self.ws.send_to(text_data=json.dumps(content))
 
     async def close(self) -> None:
-        await self.ws.disconnect()
+        # Leaving gives back the lease and audits: let it finish on a loaded machine.
+        await self.ws.disconnect(timeout=5)
 
 
 async def audio_socket(user) -> Frames:

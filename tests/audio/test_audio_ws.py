@@ -64,7 +64,7 @@ async def test_viewers_may_neither_listen_nor_talk(link, sim, viewer):
     await ws.send_to(bytes_data=tone(440, 0, CHUNK, 16000))
     assert (await ws.receive_json_from(timeout=5))["code"] == "not_talking"
     assert sim.subscription_count(MIC) == 0 and not sim.robot.speaker.chunks
-    await ws.disconnect()
+    await ws.disconnect(timeout=5)
 
 
 async def test_talk_reaches_the_robot_speakers_with_its_format_declared(link, sim, operator, admin_user):
