@@ -50,6 +50,9 @@ def _unchecked() -> None:
     return None
 
 
+FORBIDDEN = "Your role may not command the robot (operators and admins can)."
+
+
 @dataclass
 class Command:
     """What to audit (``action``, ``params``), how to check the input and how to send it.
@@ -63,17 +66,15 @@ class Command:
     send: Callable[[Any], Awaitable[str | None]]
     check: Callable[[], Any] = _unchecked
     allowed: Callable[[Any], bool] = is_operator
+    refusal: str = FORBIDDEN  # what a person whose role ``allowed`` refuses is told
     result: dict[str, Any] = field(default_factory=dict)
-
-
-FORBIDDEN = "Your role may not command the robot (operators and admins can)."
 
 
 def run_command(command: Command, *, user: Any, source: str) -> str:
     """The synchronous face: one hop onto the event loop, for ``send``."""
     audit = {"user": user, "source": source, "action": command.action, "params": command.params}
     if not command.allowed(user):
-        error = Forbidden(FORBIDDEN)
+        error = Forbidden(command.refusal)
         audit_record(**audit, ok=False, outcome=error.message, error_code=error.code)
         raise error
     try:
@@ -91,7 +92,7 @@ async def arun(command: Command, *, user: Any, source: str) -> str:
     audit = {"user": user, "source": source, "action": command.action, "params": command.params}
     # The role check may query the user's groups: never from the event loop itself.
     if not await sync_to_async(command.allowed, thread_sensitive=True)(user):
-        error = Forbidden(FORBIDDEN)
+        error = Forbidden(command.refusal)
         await _record(**audit, ok=False, outcome=error.message, error_code=error.code)
         raise error
     try:
@@ -112,13 +113,14 @@ async def arun_command(
     params: dict[str, Any],
     run: Callable[[], Awaitable[str | None]],
     allowed: Callable[[Any], bool] = is_operator,
+    refusal: str = FORBIDDEN,
 ) -> str:
     """Run ``run`` for ``user`` if allowed; audit the outcome; return a human-readable result."""
 
     async def send(_: Any) -> str | None:
         return await run()
 
-    return await arun(Command(action, params, send, allowed=allowed), user=user, source=source)
+    return await arun(Command(action, params, send, allowed=allowed, refusal=refusal), user=user, source=source)
 
 
 async def arecord_invalid(*, user: Any, source: str, action: str, params: dict[str, Any], error: str) -> None:

@@ -70,7 +70,8 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
             return f"took the drive lock from {previous.username}; zero velocity not sent: {exc.message}"
         return f"took the drive lock from {previous.username}"
 
-    await arun_command(user=user, source=source, action="teleop.takeover", params={}, run=run, allowed=is_admin)
+    await arun_command(user=user, source=source, action="teleop.takeover", params={}, run=run, allowed=is_admin,
+                       refusal="Only admins may take over the drive lock.")
     return me
 
 

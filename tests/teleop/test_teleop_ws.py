@@ -118,7 +118,8 @@ async def test_it_lets_an_admin_take_over_and_stops_the_previous_driver(link, si
     await wait_twist(sim, is_moving)
 
     await otto_ws.send_json_to({"type": "takeover"})  # operators may not
-    assert (await error_frame(otto_ws))["code"] == "forbidden"
+    refused = await error_frame(otto_ws)
+    assert refused["code"] == "forbidden" and "Only admins" in str(refused), refused
 
     await ada_ws.send_json_to({"type": "takeover"})
     assert (await lock_frame(otto_ws, lambda f: f["holder"] == "ada"))["you"] is False
