@@ -158,7 +158,7 @@ WHITENOISE_AUTOREFRESH = DEBUG
 if env_bool("STATIC_HASHED", False):
     STORAGES = {
         "default": {"BACKEND": "django.core.files.storage.FileSystemStorage"},
-        "staticfiles": {"BACKEND": "cyborg_site.staticfiles.HashedStaticFiles"},
+        "staticfiles": {"BACKEND": "django.contrib.staticfiles.storage.ManifestStaticFilesStorage"},
     }
 
 # --- Redis: channel layer, Celery broker, latest-state store ---------------------------
@@ -200,7 +200,12 @@ _names = env_json_dict("ROBOT_NAME_OVERRIDES")
 ROBOT_TOPICS: dict[str, str] = _names.get("topics", {})
 ROBOT_SERVICES: dict[str, str] = _names.get("services", {})
 ROBOT_ACTIONS: dict[str, str] = _names.get("actions", {})
-ROBOT_LINK_MAX_BACKOFF_S = env_float("ROBOT_LINK_MAX_BACKOFF_S", 10.0, minimum=0.5)
+# Reconnect attempts back off up to this (the link also retries at once when rosbridge's port listens again).
+ROBOT_LINK_MAX_BACKOFF_S = env_float("ROBOT_LINK_MAX_BACKOFF_S", 2.0, minimum=0.5)
+# Scaled mode: robot links share a Redis lease this long (renewed 4x as often); a standby takes over
+# at most this long after the holder dies. ROBOT_LINK_NAME names this process in the lease and health.
+ROBOT_LINK_LEASE_S = env_float("ROBOT_LINK_LEASE_S", 2.0, minimum=0.5)
+ROBOT_LINK_NAME = env_str("ROBOT_LINK_NAME", "")
 ROBOT_REQUEST_TIMEOUT_S = env_float("ROBOT_REQUEST_TIMEOUT_S", 5.0, minimum=0.1)
 # Values older than this are shown as stale (greyed) on the pages.
 STALE_AFTER_S = env_float("STALE_AFTER_S", 10.0, minimum=0.5)

@@ -12,7 +12,8 @@ import asyncio
 import logging
 import time
 from collections.abc import Awaitable, Callable, Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
+from urllib.parse import urlsplit
 
 import roslibpy
 
@@ -34,7 +35,13 @@ from robot.live.groups import (
 from robot.live.state import LINK_HEARTBEAT_S, StateStore
 from robot.supervisor import failing, supervise
 
+if TYPE_CHECKING:
+    from robot.link.lease import Lease
+
 log = logging.getLogger(__name__)
+
+# While the robot is away, how often to look whether rosbridge's port is listening again.
+PORT_WATCH_S = 0.2
 
 # (topic name, type, message, receive time) for every message on every subscribed topic.
 Listener = Callable[[str, str, dict[str, Any], float], None]
@@ -78,10 +85,11 @@ class RobotLink:
         store: StateStore,
         layer: Any,
         topics: Iterable[ri.Topic] | None = None,
-        max_backoff_s: float = 10.0,
+        max_backoff_s: float = 2.0,
         service_timeout_s: float = 5.0,
         guard_settings: dict[str, float] | None = None,
         request_queue: str = "",
+        lease: Lease | None = None,
     ) -> None:
         self.url = url
         self.store = store
@@ -89,6 +97,8 @@ class RobotLink:
         self.topics = list(topics if topics is not None else ri.monitored_topics())
         self.max_backoff_s = max_backoff_s
         self.service_timeout_s = service_timeout_s
+        # Scaled mode: the Redis lease this link holds; it publishes only while the lease is still its own.
+        self.lease = lease
         self.listeners: list[Listener] = []
         self.connected = False
         self.since = time.time()
@@ -131,6 +141,7 @@ class RobotLink:
         for t in self.topics:
             self.subscribe(t.name, t.type)
         self._tasks.append(supervise("link.heartbeat", self._heartbeat))
+        self._tasks.append(supervise("link.port-watch", self._watch_port))
         if serve_requests:
             self._serving = supervise("link.requests", self._serve)
             self._tasks.append(self._serving)
@@ -246,6 +257,7 @@ class RobotLink:
             "type": "robot.status", "connected": self.connected, "url": self.url,
             "since": self.since, "attempts": self.attempts, "link_alive": time.time(),
             "command_path": self.command_path, "failing_tasks": failing(),
+            "holder": self.lease.holder if self.lease is not None else None,
         }
 
     async def set_command_path(self, ok: bool) -> None:
@@ -288,8 +300,29 @@ class RobotLink:
         except Exception:
             log.exception("could not read the E-STOP latch")
 
-    def reconnect(self) -> None:
-        """Try now instead of waiting out the backoff (the page's reconnect button)."""
+    async def _watch_port(self) -> None:
+        """While disconnected, try again the moment rosbridge's port listens (not after the backoff)."""
+        parts = urlsplit(self.url)
+        host, port = parts.hostname or "127.0.0.1", parts.port or (443 if parts.scheme == "wss" else 80)
+        while not self._stopped:
+            await asyncio.sleep(PORT_WATCH_S)
+            if self.connected or self.ros is None:
+                continue
+            try:
+                _, writer = await asyncio.wait_for(asyncio.open_connection(host, port), PORT_WATCH_S * 2)
+            except (OSError, TimeoutError):
+                continue
+            writer.close()
+            if not self.connected:
+                log.info("rosbridge's port %s:%d is listening again; reconnecting now", host, port)
+                self.reconnect(keep_open=True)
+                await asyncio.sleep(1)  # give the handshake time before looking again
+
+    def reconnect(self, *, keep_open: bool = False) -> None:
+        """Try now instead of waiting out the backoff (the page's reconnect button).
+
+        With ``keep_open`` a connection that is open (or opening) stays as it is.
+        """
         from twisted.internet import reactor
 
         ros = self.ros
@@ -298,12 +331,15 @@ class RobotLink:
 
         def _now() -> None:
             factory = ros.factory
+            proto = getattr(factory, "_proto", None)
+            connecting = factory.connector is not None and factory.connector.state != "disconnected"
+            if keep_open and (proto is not None or connecting):
+                return
             factory.resetDelay()
             call = getattr(factory, "_callID", None)
             if call is not None and call.active():
                 call.cancel()
                 factory._callID = None
-            proto = getattr(factory, "_proto", None)
             if proto is not None:
                 proto.dropConnection(abort=True)  # the factory reconnects at once
             elif factory.connector is not None and factory.connector.state == "disconnected":
@@ -359,6 +395,10 @@ class RobotLink:
             self.guard.engage()  # latched even when the robot is offline
         if not self.connected or self.ros is None or not self.ros.is_connected:
             return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if self.lease is not None and not await self.lease.check():
+            # The fencing check: another link may hold the lease now; never command the robot twice.
+            return {"ok": False, "error_code": "offline",
+                    "error": "This robot link lost its lease; the other one takes over"}
         if op == "estop":
             return {"ok": True}
         if op == "publish":
@@ -375,6 +415,8 @@ class RobotLink:
     def _publish_zero(self) -> None:
         if self.ros is None or not self.ros.is_connected:
             raise RuntimeError("robot offline")
+        if self.lease is not None and not self.lease.held:
+            raise RuntimeError("this robot link no longer holds the lease")
         cmd_vel = ri.topic("cmd_vel")
         self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ZERO_TWIST))
 

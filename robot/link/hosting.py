@@ -19,6 +19,7 @@ from robot.link import connection as link_module
 from robot.link import redisqueue
 from robot.link.bus import aping_over_layer
 from robot.link.connection import RobotLink
+from robot.link.lease import Lease
 from robot.live.state import get_store
 from robot.supervisor import supervise
 
@@ -38,7 +39,9 @@ def register_background(name: str, service: BackgroundService, *, embedded_only:
         _background.append((name, service, embedded_only))
 
 
-async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotLink, list[asyncio.Task]]:
+async def start_link(
+    *, embedded: bool, background: bool = True, lease: Lease | None = None
+) -> tuple[RobotLink, list[asyncio.Task]]:
     link = RobotLink(
         settings.ROSBRIDGE_URL,
         store=get_store(),
@@ -48,6 +51,7 @@ async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotL
         request_queue=redisqueue.requests_key() if settings.REDIS_URL else "",
         guard_settings={"rate_hz": settings.TELEOP_RATE_HZ, "hold_s": settings.ESTOP_HOLD_S,
                         "deadman_s": settings.TELEOP_LINK_DEADMAN_S},
+        lease=lease,
     )
     await link.start()
     link_module.current = link
@@ -59,6 +63,19 @@ async def start_link(*, embedded: bool, background: bool = True) -> tuple[RobotL
     ]
     log.info("robot link started for %s (%s)", settings.ROSBRIDGE_URL, "embedded" if embedded else "standalone")
     return link, tasks
+
+
+async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: float = 10.0) -> None:
+    """Stop the background services first and let them finish (the recorder flushes), then the link."""
+    for task in tasks:
+        task.cancel()
+    if tasks:
+        _, pending = await asyncio.wait(tasks, timeout=timeout)
+        if pending:
+            log.warning("%d background service(s) did not stop within %g s", len(pending), timeout)
+    await link.stop()
+    if link_module.current is link:
+        link_module.current = None
 
 
 async def probe_command_path(link: RobotLink) -> None:

@@ -58,6 +58,7 @@ class LinkStatus(TypedDict):
     link_alive: float  # epoch seconds of the link's last heartbeat
     command_path: bool  # the link answered its last ping over the request channel
     failing_tasks: list[str]  # the link process's supervised tasks waiting to restart
+    holder: str | None  # scaled mode: the link process holding the lease
 
 
 class LinkRequest(TypedDict, total=False):

@@ -26,6 +26,7 @@ class StateStore(Protocol):
     def clear(self) -> None: ...
     async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None: ...
     async def aget_recent(self, key: str) -> list[dict[str, Any]]: ...
+    def get_recent(self, key: str) -> list[dict[str, Any]]: ...
 
 
 class MemoryStore:
@@ -40,6 +41,9 @@ class MemoryStore:
         ring.append(entry)
 
     async def aget_recent(self, key: str) -> list[dict[str, Any]]:
+        return list(self._recent.get(key, ()))
+
+    def get_recent(self, key: str) -> list[dict[str, Any]]:
         return list(self._recent.get(key, ()))
 
     async def aput(self, key: str, entry: dict[str, Any]) -> None:
@@ -103,6 +107,9 @@ class RedisStore:
 
     async def aget_recent(self, key: str) -> list[dict[str, Any]]:
         return [json.loads(v) for v in await self._aclient().lrange(f"{self._name}:recent:{key}", 0, -1)]
+
+    def get_recent(self, key: str) -> list[dict[str, Any]]:
+        return [json.loads(v) for v in self._sync.lrange(f"{self._name}:recent:{key}", 0, -1)]
 
     def clear(self) -> None:
         self._sync.delete(self._name, *self._sync.keys(f"{self._name}:recent:*"))

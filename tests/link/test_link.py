@@ -68,6 +68,9 @@ async def test_it_shows_offline_and_resubscribes_when_the_robot_returns(link, si
     await asyncio.get_running_loop().run_in_executor(None, revived.start)
     try:
         await receive_until(communicator, lambda f: f["kind"] == "status" and f["connected"], timeout=15)
+        # roslibpy subscribes again a moment after the reconnect; an update queued before the drop may come first.
+        await async_wait_until(lambda: revived.robot.subscription_count(ri.topic(BATTERY).name) == 1, timeout=10,
+                               what="the battery subscription renewed")
         frame = await receive_until(communicator, lambda f: f["kind"] == "update" and f["key"] == BATTERY, timeout=10)
         assert frame["msg"]["data"] >= 0
         assert revived.robot.subscription_count(ri.topic(BATTERY).name) == 1

@@ -1,13 +1,21 @@
 import asyncio
+import os
 import signal
+import socket
 
+from django.conf import settings
 from django.core.management.base import BaseCommand
 
-from robot.link.hosting import start_link
+from robot.link.hosting import start_link, stop_link
+from robot.link.lease import Lease
+from robot.live.state import redis_key
+
+LEASE_KEY = "link-lease"
 
 
 class Command(BaseCommand):
-    help = "Run the robot link: the one rosbridge connection, fan-out to browsers and command relay."
+    help = ("Run the robot link: the one rosbridge connection, fan-out to browsers and command relay. "
+            "With REDIS_URL, several may run: they share a lease and only its holder connects.")
 
     def handle(self, *args, **options) -> None:
         asyncio.run(self._run())
@@ -17,10 +25,40 @@ class Command(BaseCommand):
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, stop.set)
-        link, tasks = await start_link(embedded=False)
-        self.stdout.write(f"Robot link running for {link.url}; Ctrl-C to stop.")
-        await stop.wait()
-        for task in tasks:
-            task.cancel()
-        await link.stop()
+        if not settings.REDIS_URL:
+            link, tasks = await start_link(embedded=False)
+            self.stdout.write(f"Robot link running for {link.url}; Ctrl-C to stop.")
+            await stop.wait()
+            await stop_link(link, tasks)
+        else:
+            await self._run_leased(stop)
         self.stdout.write("Robot link stopped.")
+
+    async def _run_leased(self, stop: asyncio.Event) -> None:
+        """Standby until this process holds the lease, active while it does, standby again if it loses it."""
+        name = settings.ROBOT_LINK_NAME or f"{socket.gethostname()}-{os.getpid()}"
+        lease = Lease(settings.REDIS_URL, redis_key(LEASE_KEY), holder=name, ttl_s=settings.ROBOT_LINK_LEASE_S)
+        try:
+            while not stop.is_set():
+                self.stdout.write(f"Robot link {name}: standby, waiting for the lease.")
+                if not await _first(lease.acquire(), stop.wait()):
+                    break
+                link, tasks = await start_link(embedded=False, lease=lease)
+                self.stdout.write(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
+                await _first(lease.hold(), stop.wait())
+                # Hand over first (the link refuses to publish from here on), then wind down.
+                await lease.release()
+                await stop_link(link, tasks)
+        finally:
+            await lease.release()
+            await lease.close()
+
+
+async def _first(main, stop) -> bool:
+    """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first."""
+    main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
+    done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)
+    for task in pending:
+        task.cancel()
+    await asyncio.gather(*pending, return_exceptions=True)
+    return main_task in done
