@@ -5,7 +5,9 @@ only appends to a bounded buffer. ``run`` (a background service where the link r
 swaps the buffer out every ``HISTORY_FLUSH_S`` (or sooner when a batch is full) and
 writes it from a worker thread. It also reloads the policies, subscribes the link to the
 topics they name, and keeps the latest message of each periodic topic in the
-latest-state store for the sampler (Celery beat or the embedded loop).
+latest-state store for the sampler (Celery beat or the embedded loop), with a bounded
+backlog of one message per interval: a sampler that was down (a Celery worker outage)
+stores those when it returns instead of losing them.
 """
 
 from __future__ import annotations
@@ -20,12 +22,17 @@ from django.conf import settings
 
 from history.models import Mode
 from history.policies import Policy, load_policies
-from history.sampling import latest_key
+from history.sampling import is_due, latest_key
 from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
 
 log = logging.getLogger(__name__)
 
 Writer = Callable[[Sequence[Row]], int]
+
+# The latest-state store key where the recorder leaves, per every-message topic, the receive time of the
+# last message it took and the topic's rate: the next recorder (a standby link taking over, a restart)
+# counts the messages that fell between the two.
+WATERMARK_KEY = "_recorder"
 
 
 class Recorder:
@@ -46,6 +53,8 @@ class Recorder:
         self.every: frozenset[str] = frozenset()
         self.periodic: frozenset[str] = frozenset()
         self.latest: dict[str, dict[str, Any]] = {}
+        self.backlog: list[dict[str, Any]] = []
+        self._backlog_t: dict[str, float] = {}
         self._buffer: list[Pending] = []
         self._full: asyncio.Event | None = None
         self._subscribed_by_us: set[str] = set()
@@ -53,12 +62,22 @@ class Recorder:
         self._write_log = FailureLog("writing recorded messages")
         self._retry: list[Row] = []
         self.received = self.stored = self.dropped = self.oversize = 0
+        # Every-message topics: [first t, last t, messages] taken here; the previous recorder's [last t, rate].
+        self._seen: dict[str, list[float]] = {}
+        self._previous: dict[str, list[float]] = {}
+        self.gap_lost: dict[str, int] = {}  # estimated messages lost between the previous recorder and this one
 
     # --- on the event-loop thread: never blocks --------------------------------------
 
     def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if name in self.every:
             self.received += 1
+            seen = self._seen.get(name)
+            if seen is None:
+                self._seen[name] = [t, t, 1]
+                self._count_gap(name, t)
+            else:
+                seen[1], seen[2] = t, seen[2] + 1
             if len(self._buffer) >= self.buffer_rows:
                 self._drop(name)
                 return
@@ -66,7 +85,31 @@ class Recorder:
             if len(self._buffer) >= self.batch_rows and self._full is not None:
                 self._full.set()
         elif name in self.periodic:
-            self.latest[name] = {"key": latest_key(name), "topic": name, "msg_type": msg_type, "msg": msg, "t": t}
+            entry = {"key": latest_key(name), "topic": name, "msg_type": msg_type, "msg": msg, "t": t}
+            self.latest[name] = entry
+            if is_due(t, self._backlog_t.get(name, 0.0), self.policies[name].interval_s):
+                self._backlog_t[name] = t
+                self.backlog.append(entry)
+
+    def _count_gap(self, name: str, t: float) -> None:
+        previous = self._previous.pop(name, None)
+        if previous is None:
+            return
+        last_t, rate_hz = previous
+        lost = max(0, round((t - last_t) * rate_hz) - 1)
+        if lost:
+            self.gap_lost[name] = self.gap_lost.get(name, 0) + lost
+            log.warning("history: about %d messages of %s were not recorded in the %.2f s between the previous "
+                        "recorder's last one and this one's first (a link failover or restart)", lost, name, t - last_t)
+
+    async def resume_after(self, store: Any) -> None:
+        """Pick up where the previous recorder (another link, an earlier run) left off, to count the gap."""
+        previous = (await store.aget_many([WATERMARK_KEY])).get(WATERMARK_KEY) or {}
+        self._previous = dict(previous.get("topics", {}))
+
+    def watermark(self) -> dict[str, Any]:
+        return {"topics": {name: [last, (n - 1) / (last - first) if last > first else 0.0]
+                           for name, (first, last, n) in self._seen.items()}}
 
     def _drop(self, name: str) -> None:
         self.dropped += 1
@@ -81,6 +124,7 @@ class Recorder:
         self.periodic = frozenset(p.topic for p in policies.values() if p.mode == Mode.PERIODIC)
         for name in set(self.latest) - self.periodic:
             self.latest.pop(name, None)
+            self._backlog_t.pop(name, None)
 
     # --- flushing ---------------------------------------------------------------------
 
@@ -117,6 +161,7 @@ class Recorder:
     async def run(self, link: Any) -> None:
         """Background service: reload policies, keep subscriptions, flush batches, publish latest."""
         self._full = asyncio.Event()
+        await self.resume_after(link.store)
         if self.offer not in link.listeners:
             link.listeners.append(self.offer)
         next_reload = 0.0
@@ -135,7 +180,11 @@ class Recorder:
         finally:
             if self.offer in link.listeners:
                 link.listeners.remove(self.offer)
-            await self.flush()
+            await self.flush()  # a clean stop (SIGTERM, lease handed over) loses nothing it took
+            try:
+                await self.publish_latest(link.store)
+            except Exception:
+                log.warning("history: could not leave the recorder's watermark on stopping", exc_info=True)
 
     async def reload(self, link: Any) -> None:
         try:
@@ -156,8 +205,13 @@ class Recorder:
 
     async def publish_latest(self, store: Any) -> None:
         latest, self.latest = self.latest, {}
+        backlog, self.backlog = self.backlog, []
         for entry in latest.values():
             await store.aput(entry["key"], entry)
+        for entry in backlog:
+            await store.aappend_recent(entry["key"], entry, settings.HISTORY_BACKLOG_SAMPLES)
+        if self._seen:
+            await store.aput(WATERMARK_KEY, self.watermark())
 
 
 # The recorder running in this process, if any (tests and the status view read its counters).

@@ -3,6 +3,11 @@
 One function for both wirings: the Celery beat task (``history.sample``) and, in the
 embedded default, a loop inside the server process. Safe when several run at once: a
 compare-and-set on the policy row lets exactly one of them store each message.
+
+The recorder also keeps a backlog of one message per interval (``HISTORY_BACKLOG_SAMPLES``
+per topic) beside the latest one, so a sampler that was stopped (a Celery worker outage)
+stores every period it missed when it runs again; only an outage longer than the backlog
+loses samples, the oldest first.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ def latest_key(topic: str) -> str:
     return f"{KEY_PREFIX}{topic}"
 
 
-def _is_due(t: float, last: float, interval_s: float) -> bool:
+def is_due(t: float, last: float, interval_s: float) -> bool:
     # Messages arrive with jitter; without a little slack a 5 s topic sampled every 5 s skips periods.
     slack = min(0.25, interval_s * 0.1)
     return t > last and t - last >= interval_s - slack
@@ -49,18 +54,23 @@ def sample_periodic(*, store: Any = None) -> int:
     due: list[Pending] = []
     with transaction.atomic():
         for policy in periodic:
-            entry = entries.get(policy.topic)
-            if entry is None:
+            latest = entries.get(policy.topic)
+            if latest is None:
                 continue
-            t = float(entry["t"])
-            if not _is_due(t, policy.last_sampled_t, policy.interval_s):
+            candidates = [*store.get_recent(latest_key(policy.topic)), latest]
+            picked, last = [], policy.last_sampled_t
+            for entry in sorted(candidates, key=lambda e: float(e["t"])):
+                if is_due(float(entry["t"]), last, policy.interval_s):
+                    picked.append(entry)
+                    last = float(entry["t"])
+            if not picked:
                 continue
             won = TopicPolicy.objects.filter(topic=policy.topic, last_sampled_t=policy.last_sampled_t).update(
-                last_sampled_t=t
+                last_sampled_t=last
             )
             if not won:
-                continue  # another sampler stored it
-            due.append((policy.topic, entry.get("msg_type") or policy.msg_type, entry["msg"], t))
+                continue  # another sampler stored them
+            due.extend((policy.topic, e.get("msg_type") or policy.msg_type, e["msg"], float(e["t"])) for e in picked)
         limits = {p.topic: p.max_bytes for p in periodic}
         rows, _ = encode(due, limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
         return write_rows(rows)
