@@ -12,7 +12,8 @@
 # STACK_WEB_PORTS ("8401 8402"), STACK_SIM_PORT (9490), STACK_VIDEO_PORT (8490),
 # DATABASE_URL (postgres://postgres@127.0.0.1:5432/cyborg_stack, created if missing),
 # REDIS_URL (redis://127.0.0.1:6379/0), CHANNEL_LAYER_PREFIX (cyborg-stack),
-# ROSBRIDGE_URL (unset: the bundled simulator is started), STACK_ENV (extra NAME=value lines).
+# ROSBRIDGE_URL (unset: the bundled simulator is started, with STACK_SIM_ARGS),
+# STACK_ENV (extra NAME=value lines for the environment file).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -80,7 +81,7 @@ names() {
 
 launch() {
   case $1 in
-    sim) start sim "$BIN/python" manage.py simrobot --port "$SIM_PORT" --video-port "$VIDEO_PORT" ;;
+    sim) start sim "$BIN/python" manage.py simrobot --port "$SIM_PORT" --video-port "$VIDEO_PORT" ${STACK_SIM_ARGS:-} ;;
     link-a | link-b) start "$1" env ROBOT_LINK_NAME="$1" "$BIN/python" manage.py robotlink ;;
     web-a) start web-a "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_A" cyborg_site.asgi:application ;;
     web-b) start web-b "$BIN/daphne" --proxy-headers -b 127.0.0.1 -p "$WEB_B" cyborg_site.asgi:application ;;
@@ -178,8 +179,9 @@ up() {
   mkdir -p "$PIDS" "$LOGS" "$STACK_DIR/var"
   write_env
   create_database
-  in_env "$BIN/python" manage.py migrate --noinput >>"$LOGS/setup.log"
+  # Static files first: with hashed names every page (and start-up code rendering one) needs the manifest.
   in_env "$BIN/python" manage.py collectstatic --noinput >>"$LOGS/setup.log"
+  in_env "$BIN/python" manage.py migrate --noinput >>"$LOGS/setup.log"
   in_env "$BIN/python" manage.py bootstrap >>"$LOGS/setup.log"
   write_nginx
   for name in $(names); do launch "$name"; done
@@ -209,6 +211,12 @@ restart() {
   for name in "$@"; do
     stop "$name"
     launch "$name"
+    case $name in
+      web-a) wait_port "$WEB_A" 60 web-a ;;
+      web-b) wait_port "$WEB_B" 60 web-b ;;
+      sim) wait_port "$SIM_PORT" 30 simulator ;;
+      nginx) wait_port "$HTTPS_PORT" 10 nginx ;;
+    esac
   done
 }
 

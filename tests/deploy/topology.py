@@ -1,0 +1,230 @@
+"""The production topology as real processes (scripts/stack.sh) on private Redis and PostgreSQL servers.
+
+Fault tests stop and start these private servers for real; the machine's own never are.
+Used by tests/deploy and bench/failover.py.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import os
+import shutil
+import signal
+import ssl
+import subprocess
+import tempfile
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+from tests.stack import PASSWORD, PYTHON, ROOT, USERS, free_port, wait_for_port
+
+LEASE = "link-lease"
+_TLS = ssl.create_default_context()
+_TLS.check_hostname = False
+_TLS.verify_mode = ssl.CERT_NONE
+
+
+def _json(body: bytes) -> dict:
+    try:
+        return json.loads(body or b"{}")
+    except ValueError:
+        return {"not_json": body[:300].decode(errors="replace")}
+
+
+def _as_postgres(args: list[str]) -> list[str]:
+    """PostgreSQL refuses to run as root: drop to the postgres user then."""
+    return ["runuser", "-u", "postgres", "--", *args] if os.geteuid() == 0 else args
+
+
+class PrivateRedis:
+    """A redis-server of our own on a free port, without persistence (a restart empties it)."""
+
+    def __init__(self) -> None:
+        self.port = free_port()
+        self.proc: subprocess.Popen | None = None
+
+    @property
+    def url(self) -> str:
+        return f"redis://127.0.0.1:{self.port}/0"
+
+    def start(self) -> PrivateRedis:
+        self.proc = subprocess.Popen(
+            ["redis-server", "--port", str(self.port), "--bind", "127.0.0.1", "--save", "", "--appendonly", "no"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        wait_for_port(self.port, proc=self.proc)
+        return self
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+
+class PrivatePostgres:
+    """initdb into a temporary folder and run Debian's postgres binaries on a free port."""
+
+    def __init__(self) -> None:
+        found = sorted(glob.glob("/usr/lib/postgresql/*/bin/pg_ctl"))
+        if not found:
+            raise RuntimeError("no PostgreSQL server binaries under /usr/lib/postgresql/*/bin")
+        self.bin = Path(found[-1]).parent
+        self.port = free_port()
+        self.tmp = Path(tempfile.mkdtemp(prefix="cyborg-pg-"))
+        self.data = self.tmp / "data"
+        if os.geteuid() == 0:
+            shutil.chown(self.tmp, "postgres")
+
+    @property
+    def url(self) -> str:
+        return f"postgres://postgres@127.0.0.1:{self.port}/cyborg"
+
+    def start(self) -> PrivatePostgres:
+        if not self.data.exists():
+            subprocess.run(_as_postgres([str(self.bin / "initdb"), "-D", str(self.data), "-U", "postgres",
+                                         "--auth=trust", "-E", "UTF8", "--no-sync"]),
+                           check=True, capture_output=True, timeout=120)
+        subprocess.run(_as_postgres([
+            str(self.bin / "pg_ctl"), "-D", str(self.data), "-l", str(self.tmp / "postgres.log"), "-w", "-t", "60",
+            "-o", f"-p {self.port} -k {self.tmp} -c listen_addresses=127.0.0.1 -c fsync=off "
+                  "-c synchronous_commit=off -c full_page_writes=off", "start"]),
+            check=True, capture_output=True, timeout=90)
+        return self
+
+    def stop(self, mode: str = "fast") -> None:
+        subprocess.run(_as_postgres([str(self.bin / "pg_ctl"), "-D", str(self.data), "-m", mode, "-w", "stop"]),
+                       capture_output=True, timeout=60)
+
+    def remove(self) -> None:
+        self.stop("immediate")
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+class Topology:
+    """scripts/stack.sh with free ports, a temporary folder and the given services."""
+
+    def __init__(self, *, redis_url: str, database_url: str, env: dict[str, str] | None = None) -> None:
+        self.dir = Path(tempfile.mkdtemp(prefix="cyborg-topology-"))
+        self.https_port, self.http_port = free_port(), free_port()
+        self.web_ports = (free_port(), free_port())
+        self.prefix = f"cyborg-topology-{os.getpid()}"
+        self.redis_url = redis_url
+        extra = {"ROBOT_LINK_MAX_BACKOFF_S": "1", "HISTORY_SAMPLE_TICK_S": "0.5", **(env or {})}
+        self.env = {
+            **{k: v for k, v in os.environ.items() if not k.startswith(("DJANGO_", "PYTEST_"))},
+            "STACK_DIR": str(self.dir), "STACK_HTTPS_PORT": str(self.https_port),
+            "STACK_HTTP_PORT": str(self.http_port), "STACK_WEB_PORTS": " ".join(map(str, self.web_ports)),
+            "STACK_SIM_PORT": str(free_port()), "STACK_VIDEO_PORT": str(free_port()),
+            "REDIS_URL": redis_url, "DATABASE_URL": database_url, "CHANNEL_LAYER_PREFIX": self.prefix,
+            "STACK_ENV": "\n".join(f"{k}={v}" for k, v in extra.items()),
+        }
+        self.env.pop("ROSBRIDGE_URL", None)
+        self.tokens: dict[str, str] = {}
+
+    @property
+    def url(self) -> str:
+        return f"https://localhost:{self.https_port}"
+
+    def script(self, command: str, timeout: float = 180) -> None:
+        out = subprocess.run(["bash", "scripts/stack.sh", *command.split()], cwd=ROOT, env=self.env,
+                             capture_output=True, text=True, timeout=timeout)
+        if out.returncode != 0:
+            raise RuntimeError(f"stack.sh {command} exited with {out.returncode}:\n{out.stdout[-2000:]}\n"
+                               f"{out.stderr[-3000:]}\n{self.logs()}")
+
+    def up(self) -> Topology:
+        self.script("up")
+        for name, role in USERS.items():
+            self.manage("adduser", name, "--role", role, "--password", PASSWORD)
+        return self
+
+    def down(self) -> None:
+        try:
+            self.script("down", timeout=120)
+        finally:
+            shutil.rmtree(self.dir, ignore_errors=True)
+
+    def manage(self, *args: str) -> str:
+        env = {**self.env, **self.stack_env()}
+        return subprocess.run([PYTHON, "manage.py", *args], cwd=ROOT, env=env, check=True, capture_output=True,
+                              text=True, timeout=120).stdout
+
+    def stack_env(self) -> dict[str, str]:
+        lines = (self.dir / "cyborg.env").read_text().splitlines()
+        return dict(line.split("=", 1) for line in lines if "=" in line and not line.startswith("#"))
+
+    # --- processes ---------------------------------------------------------------------
+
+    def pid(self, name: str) -> int:
+        return int((self.dir / "pids" / f"{name}.pid").read_text())
+
+    def alive(self, name: str) -> bool:
+        try:
+            os.kill(self.pid(name), 0)
+        except (ProcessLookupError, FileNotFoundError):
+            return False
+        return Path(f"/proc/{self.pid(name)}/status").read_text().find("State:\tZ") < 0
+
+    def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
+        os.killpg(self.pid(name), sig)
+
+    def log(self, name: str) -> str:
+        path = self.dir / "logs" / f"{name}.log"
+        return path.read_text(errors="replace") if path.exists() else ""
+
+    def logs(self) -> str:
+        return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}"
+                         for p in sorted((self.dir / "logs").glob("*.log")))
+
+    def active_link(self) -> str | None:
+        """The name of the link holding the lease (its token starts with the holder's name)."""
+        import redis
+
+        try:
+            token = redis.Redis.from_url(self.redis_url, socket_timeout=1).get(f"{self.prefix}:{LEASE}")
+        except redis.RedisError:
+            return None
+        return token.decode().split(":", 1)[0] if token else None
+
+    # --- HTTP through nginx, or straight to one web process -----------------------------
+
+    def fetch(self, path: str, *, web: int | None = None, method: str = "GET", body: dict | None = None,
+              user: str | None = None, timeout: float = 5) -> tuple[int, dict]:
+        base = self.url if web is None else f"http://127.0.0.1:{self.web_ports[web]}"
+        headers = {"Content-Type": "application/json", "Host": "localhost"}
+        if web is not None:
+            headers["X-Forwarded-Proto"] = "https"  # what nginx says; Django trusts it (SECURE_PROXY_SSL_HEADER)
+        if user is not None:
+            headers["Authorization"] = f"Token {self.token(user)}"
+        data = json.dumps(body).encode() if body is not None else None
+        request = urllib.request.Request(base + path, data=data, headers=headers, method=method)
+        try:
+            with urllib.request.urlopen(request, timeout=timeout, context=_TLS) as res:
+                return res.status, _json(res.read())
+        except urllib.error.HTTPError as err:
+            return err.code, _json(err.read())
+
+    def token(self, user: str) -> str:
+        if user not in self.tokens:
+            status, body = self.fetch("/api/auth/token/", method="POST",
+                                      body={"username": user, "password": PASSWORD})
+            assert status == 200, body
+            self.tokens[user] = body["token"]
+        return self.tokens[user]
+
+    def health(self, web: int | None = None) -> dict:
+        try:
+            return self.fetch("/healthz", web=web, timeout=2)[1]
+        except OSError:
+            return {}
+
+    def wait(self, condition, *, timeout: float = 30, what: str = "the condition", every: float = 0.05) -> float:
+        """Wait until ``condition()`` is true; returns the seconds it took."""
+        started = time.monotonic()
+        while not condition():
+            if time.monotonic() - started > timeout:
+                raise AssertionError(f"{what} not within {timeout} s\n{self.logs()}")
+            time.sleep(every)
+        return time.monotonic() - started
