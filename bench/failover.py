@@ -29,7 +29,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from tests.deploy.topology import PrivatePostgres, PrivateRedis, Topology  # noqa: E402
+from tests.deploy.topology import PrivatePostgres, Topology  # noqa: E402
+from tests.support_processes import PrivateRedis  # noqa: E402
 
 RATE_HZ = 20.0
 INTERVAL_S = 1.0

@@ -157,12 +157,12 @@ class RobotLink:
                 await asyncio.wait_for(asyncio.shield(self._serving), 2)
             except (TimeoutError, Exception):
                 log.warning("robot link request loop did not stop in time")
-        await _cancel_within(self._tasks, 2)
+        await cancel_within(self._tasks, 2)
         self._tasks.clear()
         if self.guard is not None:
             self.guard.stop()  # zero before the connection goes, if the robot may be moving
         if self._coalescer is not None:
-            await _cancel_within([self._coalescer._task], 1)
+            await cancel_within([self._coalescer._task], 1)
             self._coalescer.close()
         if self.ros is not None:
             ros, self.ros = self.ros, None
@@ -171,7 +171,7 @@ class RobotLink:
             ros.factory.stopTrying()
             if ros.is_connected:
                 await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
-        await _cancel_within(list(self._inflight), 1)
+        await cancel_within(list(self._inflight), 1)
         self.connected = False
 
     def _spawn(self, coro: Any) -> None:
@@ -451,7 +451,7 @@ class RobotLink:
         return {"ok": False, "error_code": "failed", "error": str(value)}
 
 
-async def _cancel_within(tasks: list, timeout: float) -> None:
+async def cancel_within(tasks: list, timeout: float) -> None:
     for task in tasks:
         task.cancel()
     if tasks:

@@ -18,7 +18,7 @@ from django.conf import settings
 from robot.link import connection as link_module
 from robot.link import redisqueue
 from robot.link.bus import aping_over_layer
-from robot.link.connection import RobotLink
+from robot.link.connection import RobotLink, cancel_within
 from robot.link.lease import Lease
 from robot.live.state import get_store
 from robot.supervisor import supervise
@@ -67,12 +67,7 @@ async def start_link(
 
 async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: float = 10.0) -> None:
     """Stop the background services first and let them finish (the recorder flushes), then the link."""
-    for task in tasks:
-        task.cancel()
-    if tasks:
-        _, pending = await asyncio.wait(tasks, timeout=timeout)
-        if pending:
-            log.warning("%d background service(s) did not stop within %g s", len(pending), timeout)
+    await cancel_within(tasks, timeout)
     await link.stop()
     if link_module.current is link:
         link_module.current = None

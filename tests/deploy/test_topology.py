@@ -17,8 +17,9 @@ from django.conf import settings
 from playwright.sync_api import expect
 
 from tests.browser.support import login
-from tests.deploy.topology import PrivatePostgres, PrivateRedis, Topology
+from tests.deploy.topology import PrivatePostgres, Topology
 from tests.stack import PYTHON, ROOT
+from tests.support_processes import PrivateRedis
 
 pytestmark = [
     pytest.mark.stack,

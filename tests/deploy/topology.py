@@ -19,7 +19,7 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
-from tests.stack import PASSWORD, PYTHON, ROOT, USERS, free_port, wait_for_port
+from tests.stack import PASSWORD, PYTHON, ROOT, USERS, free_port
 
 LEASE = "link-lease"
 _TLS = ssl.create_default_context()
@@ -37,30 +37,6 @@ def _json(body: bytes) -> dict:
 def _as_postgres(args: list[str]) -> list[str]:
     """PostgreSQL refuses to run as root: drop to the postgres user then."""
     return ["runuser", "-u", "postgres", "--", *args] if os.geteuid() == 0 else args
-
-
-class PrivateRedis:
-    """A redis-server of our own on a free port, without persistence (a restart empties it)."""
-
-    def __init__(self) -> None:
-        self.port = free_port()
-        self.proc: subprocess.Popen | None = None
-
-    @property
-    def url(self) -> str:
-        return f"redis://127.0.0.1:{self.port}/0"
-
-    def start(self) -> PrivateRedis:
-        self.proc = subprocess.Popen(
-            ["redis-server", "--port", str(self.port), "--bind", "127.0.0.1", "--save", "", "--appendonly", "no"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        wait_for_port(self.port, proc=self.proc)
-        return self
-
-    def stop(self) -> None:
-        if self.proc is not None and self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(10)
 
 
 class PrivatePostgres:
