@@ -84,5 +84,6 @@ def health_report() -> dict[str, Any]:
     status = link_status() if "redis" not in down else {"connected": False, "url": settings.ROSBRIDGE_URL}
     report.update(connected=bool(status["connected"]), link_running=bool(status.get("link_running", False)),
                   command_path=bool(status.get("command_path", False)), robot_url=status.get("url") or "",
-                  failing_tasks=[*status.get("failing_tasks", []), *failing()])
+                  failing_tasks=[*status.get("failing_tasks", []), *failing()], link_holder=status.get("holder"),
+                  failed_subscriptions=status.get("failed_subscriptions") or {})
     return report

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import re
 import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING, Any
@@ -42,6 +43,10 @@ log = logging.getLogger(__name__)
 
 # While the robot is away, how often to look whether rosbridge's port is listening again.
 PORT_WATCH_S = 0.2
+# ROS 1 rosbridge answers a subscription it cannot make (a message package the robot lacks) only on
+# /rosout, as an error from its own node naming the request id roslibpy gave it.
+_ROSBRIDGE_NODE = "/rosbridge_websocket"
+_FAILED_SUBSCRIBE = re.compile(r"\[id: subscribe:(?P<topic>/[^\]]*?):\d+\] subscribe: (?P<error>.*)", re.S)
 
 # (topic name, type, message, receive time) for every message on every subscribed topic.
 Listener = Callable[[str, str, dict[str, Any], float], None]
@@ -99,6 +104,9 @@ class RobotLink:
         self.service_timeout_s = service_timeout_s
         # Scaled mode: the Redis lease this link holds; it publishes only while the lease is still its own.
         self.lease = lease
+        # Subscriptions the robot refused since the last (re)connect: topic -> rosbridge's reason.
+        # roslibpy sends every subscription again on each reconnect; a refusal then is reported again.
+        self.failed_subscriptions: dict[str, str] = {}
         self.listeners: list[Listener] = []
         self.connected = False
         self.since = time.time()
@@ -209,6 +217,8 @@ class RobotLink:
     def _on_message(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if self._stopped:
             return
+        if name == ri.topic("rosout").name and msg.get("name") == _ROSBRIDGE_NODE:
+            self._note_refusal(str(msg.get("msg", "")))
         for listener in self.listeners:
             try:
                 listener(name, msg_type, msg, t)
@@ -235,9 +245,21 @@ class RobotLink:
 
     # --- connection status -----------------------------------------------------------
 
+    def _note_refusal(self, text: str) -> None:
+        refused = _FAILED_SUBSCRIBE.search(text)
+        if refused is None or refused["topic"] not in self._subscriptions:
+            return
+        first = refused["topic"] not in self.failed_subscriptions
+        self.failed_subscriptions[refused["topic"]] = refused["error"].strip()
+        if first:
+            log.error("the robot refused the subscription to %s (tried again on every reconnect): %s",
+                      refused["topic"], refused["error"].strip())
+            self._spawn(self.publish_status())
+
     def _on_ready(self) -> None:
         if self._stopped:
             return
+        self.failed_subscriptions.clear()  # roslibpy subscribes again now; refusals come back on /rosout
         self.connected, self.since, self.attempts = True, time.time(), 0
         log.info("robot link connected to %s", self.url)
         self._spawn(self.publish_status())
@@ -258,6 +280,7 @@ class RobotLink:
             "since": self.since, "attempts": self.attempts, "link_alive": time.time(),
             "command_path": self.command_path, "failing_tasks": failing(),
             "holder": self.lease.holder if self.lease is not None else None,
+            "failed_subscriptions": dict(self.failed_subscriptions),
         }
 
     async def set_command_path(self, ok: bool) -> None:

@@ -59,6 +59,7 @@ class LinkStatus(TypedDict):
     command_path: bool  # the link answered its last ping over the request channel
     failing_tasks: list[str]  # the link process's supervised tasks waiting to restart
     holder: str | None  # scaled mode: the link process holding the lease
+    failed_subscriptions: dict[str, str]  # topic -> why the robot refused it (since the last connect)
 
 
 class LinkRequest(TypedDict, total=False):

@@ -114,6 +114,11 @@ for _action in ("move_base_msgs/MoveBase", "cyborg_navigation/Navigation"):
     )
 
 # Services: (request definition, response definition).
+def known_package(msg_type: str) -> bool:
+    """Whether the robot has the message package of ``msg_type`` (rosbridge can import its classes)."""
+    return any(name.split("/", 1)[0] == msg_type.split("/", 1)[0] for name in _DEFS)
+
+
 SERVICE_DEFS: dict[str, tuple[str, str]] = {
     "std_srvs/Empty": ("", ""),
     "std_srvs/Trigger": ("", "bool success; string message"),

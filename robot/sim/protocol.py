@@ -306,6 +306,10 @@ class Client:
             )
         if claimed is not None and not _TYPE_RE.match(claimed):
             raise ProtocolError(f"Unable to import msg class {claimed}: invalid message type")
+        if claimed is not None and known is None and not messages.known_package(claimed):
+            package, name = claimed.split("/", 1)
+            raise ProtocolError(f"Unable to import msg class {name} from package {package}. "
+                                f"Caused by: No module named {package}.msg")
         if known is None and claimed is None:
             raise ProtocolError(f"Cannot infer topic type for topic {topic} as it is not yet advertised")
         return known or claimed  # type: ignore[return-value]

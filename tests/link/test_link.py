@@ -153,3 +153,16 @@ async def test_it_turns_nagle_off_on_the_rosbridge_socket(link):
     handle = link.ros.factory._proto.transport.getHandle()
     # With Nagle on, small command frames wait ~30-40 ms for the robot's delayed ACK.
     assert handle.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
+
+
+async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_every_reconnect(link, sim):
+    link.subscribe("/lidar/points", "velodyne_msgs/VelodyneScan")  # a package the robot does not have
+
+    await async_wait_until(lambda: "/lidar/points" in link.failed_subscriptions, timeout=10, what="the refusal")
+    assert "velodyne_msgs" in link.failed_subscriptions["/lidar/points"]
+    assert "/lidar/points" in link.status()["failed_subscriptions"]
+
+    before = link.since
+    link.reconnect()
+    await async_wait_until(lambda: link.since > before and "/lidar/points" in link.failed_subscriptions,
+                           timeout=15, what="the subscription tried (and refused) again after the reconnect")
