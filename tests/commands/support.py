@@ -68,7 +68,8 @@ def wait_ready(sim) -> None:
 
 def wait_server_ready() -> None:
     """The server has heard that startup finished (mode changes plan from what it has heard)."""
-    wait_until(lambda: async_to_sync(StateWatch().start)() == "suspension", what="the server to hear of suspension")
+    wait_until(lambda: async_to_sync(StateWatch().start)() == "suspension", timeout=15,
+               what="the server to hear of suspension")
 
 
 def last_audit() -> AuditEntry:
