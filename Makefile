@@ -53,6 +53,7 @@ test: install browser nginx
 
 lint: install
 	$(BIN)/ruff check .
+	env -u REDIS_URL -u DATABASE_URL $(BIN)/mypy
 
 bench: install
 	for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b; done

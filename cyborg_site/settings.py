@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from datetime import timedelta
 from pathlib import Path
+from typing import Any
 
 import dj_database_url
 
@@ -165,7 +166,7 @@ if env_bool("STATIC_HASHED", False):
 REDIS_URL = env_str("REDIS_URL")
 EMBEDDED = not REDIS_URL  # one process hosts the web server, the robot link and the sampling loop
 if REDIS_URL:
-    CHANNEL_LAYERS = {
+    CHANNEL_LAYERS: dict[str, dict[str, Any]] = {
         "default": {
             "BACKEND": "channels_redis.core.RedisChannelLayer",
             "CONFIG": {

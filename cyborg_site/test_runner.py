@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+from argparse import ArgumentParser
+from typing import Any
+
 
 class PytestTestRunner:
-    def __init__(self, verbosity: int = 1, failfast: bool = False, keepdb: bool = False, **kwargs) -> None:
+    def __init__(self, verbosity: int = 1, failfast: bool = False, keepdb: bool = False, **kwargs: Any) -> None:
         self.verbosity = verbosity
         self.failfast = failfast
         self.keepdb = keepdb
 
     @classmethod
-    def add_arguments(cls, parser) -> None:
+    def add_arguments(cls, parser: ArgumentParser) -> None:
         parser.add_argument("--keepdb", action="store_true", help="Preserve the test DB between runs.")
 
-    def run_tests(self, test_labels, **kwargs) -> int:
+    def run_tests(self, test_labels: list[str], **kwargs: Any) -> int:
         import sys
 
         import pytest

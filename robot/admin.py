@@ -1,7 +1,9 @@
 import math
+from typing import Any
 
 from django import forms
 from django.contrib import admin
+from django.http import HttpRequest
 
 from robot.models import AuditEntry, DomeMode, EmotionPreset, Location, SoundClip
 
@@ -14,10 +16,10 @@ class AuditEntryAdmin(admin.ModelAdmin):
     date_hierarchy = "created"
     readonly_fields = [f.name for f in AuditEntry._meta.fields]
 
-    def has_add_permission(self, request) -> bool:
+    def has_add_permission(self, request: HttpRequest) -> bool:
         return False
 
-    def has_change_permission(self, request, obj=None) -> bool:
+    def has_change_permission(self, request: HttpRequest, obj: Any = None) -> bool:
         return False
 
 
@@ -48,7 +50,7 @@ class LocationForm(forms.ModelForm):
         model = Location
         fields = ("name", "map_name", "x", "y", "heading_deg", "threshold", "description")
 
-    def __init__(self, *args, **kwargs) -> None:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         if self.instance.pk is not None:
             self.initial["heading_deg"] = round(math.degrees(self.instance.yaw), 1)

@@ -1,5 +1,8 @@
+from typing import Any
+
 from django.apps import AppConfig
 from django.core import checks
+from django.core.checks import CheckMessage
 
 
 class RobotConfig(AppConfig):
@@ -17,12 +20,12 @@ class RobotConfig(AppConfig):
         broadcast.connect()
 
 
-def check_robot_settings(app_configs, **kwargs):
+def check_robot_settings(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:
     from django.conf import settings
 
     from robot import interface
 
-    errors = []
+    errors: list[CheckMessage] = []
     if not settings.ROSBRIDGE_URL.startswith(("ws://", "wss://")):
         errors.append(checks.Error("ROSBRIDGE_URL must start with ws:// or wss://", id="robot.E001"))
     if not settings.VIDEO_URL.startswith(("http://", "https://")):

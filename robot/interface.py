@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from enum import StrEnum
 from functools import cache
+from typing import TypeVar
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,10 @@ def _overrides(setting: str) -> dict[str, str]:
         return {}
 
 
-def _apply(defaults, setting):
+_Named = TypeVar("_Named", Topic, Service, Action)
+
+
+def _apply(defaults: tuple[_Named, ...], setting: str) -> dict[str, _Named]:
     names = _overrides(setting)
     unknown = set(names) - {d.key for d in defaults}
     if unknown:

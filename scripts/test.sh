@@ -19,6 +19,7 @@ ensure_services() {
 ensure_services
 
 $BIN/ruff check .
+env -u REDIS_URL -u DATABASE_URL $BIN/mypy  # robot/ and cyborg_site/, configured in pyproject.toml
 
 echo "== Embedded default: SQLite + in-memory channel layer"
 env -u REDIS_URL -u DATABASE_URL $BIN/python -m pytest "$@"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from datetime import UTC
 
+from django.db.models import QuerySet
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import generics, serializers
 from rest_framework.pagination import PageNumberPagination
@@ -42,5 +43,5 @@ class AuditListView(generics.ListAPIView):
     serializer_class = AuditEntryOut
     pagination_class = AuditPagination
 
-    def get_queryset(self):
+    def get_queryset(self) -> QuerySet[AuditEntry]:
         return audit_entries(self.request.query_params)

@@ -11,6 +11,7 @@ from typing import Any, ClassVar
 
 from drf_spectacular.utils import extend_schema, inline_serializer
 from rest_framework import serializers
+from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
@@ -37,7 +38,7 @@ class _CommandView(CommandAPIView):
     field: ClassVar[str]
     command: ClassVar[Callable[[Any, Any], Command]]  # (value, user) -> the command
 
-    def post(self, request) -> Response:
+    def post(self, request: Request) -> Response:
         data = body_object(request)
         reject_unknown(data, [self.field])
         outcome = run(request, type(self).command(data.get(self.field), request.user))

@@ -77,7 +77,7 @@ def bad_request_detail(exc: BaseException | None) -> tuple[str, str]:
     return "Bad request.", "bad_request"
 
 
-def api_exception_handler(exc, context):
+def api_exception_handler(exc: Exception, context: dict[str, Any]) -> Response | None:
     if isinstance(exc, RobotError):
         return Response(error_body(exc.message, exc.code, getattr(exc, "field", None)), status=exc.status_code)
     service = unavailable(exc)
@@ -92,8 +92,8 @@ def api_exception_handler(exc, context):
     response = exception_handler(exc, context)
     if response is not None:
         data = response.data
-        detail = data.get("detail") if isinstance(data, dict) else data
-        response.data = error_body(str(detail), getattr(exc, "default_code", "error"))
+        found = data.get("detail") if isinstance(data, dict) else data
+        response.data = error_body(str(found), getattr(exc, "default_code", "error"))
     return response
 
 
@@ -158,7 +158,7 @@ class BoundedJSONParser(JSONParser):
     """DRF's JSON parser, refusing (400) deep nesting instead of recursing to death, and text
     the site's text policy never accepts, naming where it is."""
 
-    def parse(self, stream, media_type=None, parser_context=None):
+    def parse(self, stream: Any, media_type: str | None = None, parser_context: Any = None) -> Any:
         try:
             data = super().parse(stream, media_type, parser_context)
         except RecursionError:
@@ -170,14 +170,14 @@ class BoundedJSONParser(JSONParser):
 class PolicyFormParser(FormParser):
     """Form bodies under the same text policy as JSON ones."""
 
-    def parse(self, stream, media_type=None, parser_context=None):
+    def parse(self, stream: Any, media_type: str | None = None, parser_context: Any = None) -> Any:
         data = super().parse(stream, media_type, parser_context)
         refuse_bad_form(data)
         return data
 
 
 class PolicyMultiPartParser(MultiPartParser):
-    def parse(self, stream, media_type=None, parser_context=None):
+    def parse(self, stream: Any, media_type: str | None = None, parser_context: Any = None) -> Any:
         parsed = super().parse(stream, media_type, parser_context)
         refuse_bad_form(parsed.data)
         return parsed
@@ -186,7 +186,7 @@ class PolicyMultiPartParser(MultiPartParser):
 class SafeJSONRenderer(JSONRenderer):
     """Renders anything, including text with lone surrogates from the robot or old rows (as U+FFFD)."""
 
-    def render(self, data, accepted_media_type=None, renderer_context=None):
+    def render(self, data: Any, accepted_media_type: str | None = None, renderer_context: Any = None) -> Any:
         try:
             return super().render(data, accepted_media_type, renderer_context)
         except UnicodeEncodeError:

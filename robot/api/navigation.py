@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from drf_spectacular.utils import extend_schema
 from rest_framework import permissions, status, viewsets
 from rest_framework.decorators import action
@@ -75,7 +77,7 @@ def initial_pose_view(request: Request) -> Response:
 class OperatorWrites(permissions.BasePermission):
     message = "Your role may not change locations (operators and admins can)."
 
-    def has_permission(self, request, view) -> bool:
+    def has_permission(self, request: Request, view: Any) -> bool:
         return request.method in permissions.SAFE_METHODS or is_operator(request.user)
 
 

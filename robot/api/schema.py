@@ -7,6 +7,8 @@ negotiation (406), throttling (429) and a backing service down (503).
 
 from __future__ import annotations
 
+from typing import Any, Literal
+
 from drf_spectacular.openapi import AutoSchema
 from drf_spectacular.utils import OpenApiResponse
 from rest_framework.permissions import AllowAny
@@ -27,7 +29,7 @@ BODY_METHODS = ("POST", "PUT", "PATCH")
 
 
 class DocumentedErrorsSchema(AutoSchema):
-    def _get_response_bodies(self, direction="response"):
+    def _get_response_bodies(self, direction: Literal["request", "response"] = "response") -> Any:
         responses = super()._get_response_bodies(direction)
         for code in self._error_codes():
             if str(code) not in responses:

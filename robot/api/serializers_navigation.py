@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from asgiref.sync import async_to_sync
 from rest_framework import serializers
 
@@ -87,7 +89,7 @@ class LocationSerializer(serializers.ModelSerializer):
                                 "help_text": "heading in radians within (-2π, 2π]"},
                         "threshold": {"max_value": THRESHOLD_MAX_M, "help_text": "arrival radius, metres"}}
 
-    def to_internal_value(self, data):
+    def to_internal_value(self, data: Any) -> Any:
         if isinstance(data, dict):
             reject_unknown(data, [name for name, field in self.fields.items() if not field.read_only])
         return super().to_internal_value(data)
@@ -97,7 +99,7 @@ class LocationSerializer(serializers.ModelSerializer):
             raise serializers.ValidationError("must be within (-2π, 2π]")
         return value
 
-    def validate(self, attrs):
+    def validate(self, attrs: dict[str, Any]) -> dict[str, Any]:
         if attrs.pop("use_current_pose", False):
             attrs.update(async_to_sync(acurrent_pose)())
         elif self.instance is None and ("x" not in attrs or "y" not in attrs):

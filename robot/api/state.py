@@ -5,6 +5,7 @@ from __future__ import annotations
 from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema, inline_serializer
 from rest_framework import serializers
+from rest_framework.request import Request
 from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView
@@ -36,5 +37,5 @@ class RobotStateView(RobotAPIView):
         }), **error_responses(401)},
         tags=["robot"],
     )
-    def get(self, request):
+    def get(self, request: Request) -> Response:
         return Response(async_to_sync(arobot_state)())

@@ -5,6 +5,7 @@ from __future__ import annotations
 from asgiref.sync import async_to_sync
 from drf_spectacular.utils import extend_schema
 from rest_framework import serializers
+from rest_framework.request import Request
 from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, source_of
@@ -45,7 +46,7 @@ class ReleaseInputSerializer(serializers.Serializer):
 class EstopView(RobotAPIView):  # never throttled: a stop always goes through
 
     @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
-    def get(self, request):
+    def get(self, request: Request) -> Response:
         return Response(async_to_sync(alatch)().as_msg())
 
     @extend_schema(
@@ -58,7 +59,7 @@ class EstopView(RobotAPIView):  # never throttled: a stop always goes through
         "driving, goals, initial pose, motors on and mode changes are refused with 409 until an operator releases "
         "it. Operators and admins only.",
     )
-    def post(self, request):
+    def post(self, request: Request) -> Response:
         report = async_to_sync(estop_run)(user=request.user, source=source_of(request))
         body = {**report.as_dict(), "latch": async_to_sync(alatch)().as_msg()}
         if not report.ok:
@@ -75,7 +76,7 @@ class EstopReleaseView(RobotAPIView):
         description="An operator's explicit release, with confirm=true; audited. The motors stay off until "
         "someone turns them on.",
     )
-    def post(self, request):
+    def post(self, request: Request) -> Response:
         confirm = request.data.get("confirm") if isinstance(request.data, dict) else None
         latch = async_to_sync(estop_release)(user=request.user, source=source_of(request), confirm=confirm)
         return Response(latch.as_msg())

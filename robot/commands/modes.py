@@ -239,7 +239,7 @@ async def _redis_lock(mode: ri.Mode) -> AsyncIterator[None]:
     try:
         if not await client.set(_lock_key(), token, nx=True, px=int(ttl_s * 1000)):
             held = await client.get(_lock_key())
-            raise _busy(held.decode().partition(":")[2] if held else "")
+            raise _busy((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
         try:
             yield
         finally:

@@ -9,6 +9,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from django.db.models import Model
+
 from cyborg_site.text import EMPTY, TextRejected, clean_text
 from robot import interface as ri
 from robot.commands.pipeline import InvalidCommand
@@ -55,10 +57,10 @@ def clean_mode(value: Any) -> ri.Mode:
         raise InvalidCommand(f"mode: one of {', '.join(MODE_NAMES)}.", field="mode") from None
 
 
-def _preset(model: type, value: Any, field: str, what: str) -> str:
+def _preset(model: type[Model], value: Any, field: str, what: str) -> str:
     name = _text(value, field, limit=NAME_MAX)
-    if not name or not model.objects.filter(name=name).exists():
-        names = list(model.objects.values_list("name", flat=True))
+    if not name or not model._default_manager.filter(name=name).exists():
+        names = list(model._default_manager.values_list("name", flat=True))
         raise InvalidCommand(f"{field}: unknown {what} {name!r}; known: {', '.join(names) or 'none'}.", field=field)
     return name
 

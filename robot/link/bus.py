@@ -11,7 +11,7 @@ import asyncio
 import time
 import uuid
 import weakref
-from typing import Any
+from typing import Any, cast
 
 from asgiref.sync import async_to_sync
 from channels.layers import get_channel_layer
@@ -73,11 +73,11 @@ async def _is_online() -> bool:
 
 
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
-    return {
+    return cast(LinkRequest, {
         "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
         # The link may need most of the timeout for a service call; leave room for the reply.
         "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
-    }
+    })
 
 
 async def aping_over_layer(timeout: float) -> bool:
@@ -114,6 +114,7 @@ async def _direct(hosted: RobotLink, request: LinkRequest) -> LinkReply:
     """The link lives in this process (embedded default): no channel-layer hop."""
     if asyncio.get_running_loop() is hosted.loop:
         return await hosted.execute(request)
+    assert hosted.loop is not None  # set when the link starts, before it is hosted
     future = asyncio.run_coroutine_threadsafe(hosted.execute(request), hosted.loop)
     return await asyncio.wrap_future(future)
 

@@ -13,7 +13,7 @@ import logging
 import re
 import time
 from collections.abc import Awaitable, Callable, Iterable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 from urllib.parse import urlsplit
 
 import roslibpy
@@ -319,7 +319,7 @@ class RobotLink:
             elif self.guard.latched:
                 log.warning("the shared store lost the E-STOP latch: writing it back")
                 msg = self._latch_msg if self._latch_msg.get("latched") else {"latched": True}
-                await aannounce(LATCH_KEY, dict(server_update(LATCH_KEY, msg)), store=self.store, layer=self.layer)
+                await aannounce(LATCH_KEY, dict(server_update(LATCH_KEY, msg)), store=self.store)
         except Exception:
             log.exception("could not read the E-STOP latch")
 
@@ -384,7 +384,7 @@ class RobotLink:
                 if self._stopped:
                     return
                 continue  # a stale stop message from an earlier link
-            self._spawn(self._handle(request))
+            self._spawn(self._handle(cast(LinkRequest, request)))
 
     async def _handle(self, request: LinkRequest) -> None:
         if request.get("deadline", float("inf")) < time.time():

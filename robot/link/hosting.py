@@ -93,7 +93,7 @@ def autostart_in_daphne() -> None:
 
     if not isinstance(reactor, AsyncioSelectorReactor):
         return
-    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)
+    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)  # type: ignore[arg-type]
     if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
         reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
 

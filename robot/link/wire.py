@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -88,7 +89,7 @@ def _split_int_array(payload: bytes) -> tuple[str, np.ndarray] | None:
     return head, array
 
 
-def _data_arrays(payload: bytes):
+def _data_arrays(payload: bytes) -> Iterator[int]:
     """Offsets of the "[" of every ``"data": [`` key (bytes.find: a regex scan of 32 MB is slower)."""
     at = payload.find(_DATA_KEY)
     while at >= 0:

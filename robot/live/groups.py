@@ -76,6 +76,8 @@ class LinkRequest(TypedDict, total=False):
     service_type: str
     args: dict[str, Any]
     timeout: float
+    listener: str  # audio: which listener's lease
+    on: bool
 
 
 class LinkReply(TypedDict, total=False):
@@ -85,3 +87,4 @@ class LinkReply(TypedDict, total=False):
     error: str
     error_code: str  # offline | timeout | failed | invalid
     values: Any
+    listeners: int  # audio: how many listeners hold a lease

@@ -19,6 +19,7 @@ subscription that feeds it (robot.live.broadcast).
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import logging
 import threading
@@ -118,7 +119,7 @@ class Hub:
     def publish(self, key: str, fragment: str, t: float, *, every: bool = False) -> None:
         """Offer one serialised update (``{"key":…,"msg":…,"t":…}``) to every socket watching ``key``."""
         if threading.get_ident() != self._thread:
-            self.loop.call_soon_threadsafe(self.publish, key, fragment, t, every)
+            self.loop.call_soon_threadsafe(functools.partial(self.publish, key, fragment, t, every=every))
             return
         watchers = self._watchers.get(key)
         if not watchers:

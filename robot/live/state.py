@@ -75,7 +75,7 @@ class RedisStore:
         self._async_clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
         self._aioredis = redis.asyncio
 
-    def _aclient(self):
+    def _aclient(self) -> Any:
         # An asyncio client is bound to the loop it was first used on.
         import asyncio
 
@@ -98,7 +98,8 @@ class RedisStore:
         return {k: json.loads(v) for k, v in zip(keys, values, strict=True) if v is not None}
 
     def get_all(self) -> dict[str, dict[str, Any]]:
-        return {k.decode(): json.loads(v) for k, v in self._sync.hgetall(self._name).items()}
+        items = self._sync.hgetall(self._name).items()
+        return {k.decode() if isinstance(k, bytes) else k: json.loads(v) for k, v in items}
 
     async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None:
         name = f"{self._name}:recent:{key}"
@@ -117,7 +118,8 @@ class RedisStore:
 
 def redis_key(name: str) -> str:
     """A Redis key under this deployment's prefix (the channel layer's, so tests can isolate both)."""
-    return f"{settings.CHANNEL_LAYERS['default']['CONFIG'].get('prefix', 'cyborg')}:{name}"
+    config = settings.CHANNEL_LAYERS["default"].get("CONFIG", {})
+    return f"{config.get('prefix', 'cyborg')}:{name}"
 
 
 _store: StateStore | None = None

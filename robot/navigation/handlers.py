@@ -10,6 +10,7 @@ import asyncio
 import itertools
 import logging
 import time
+from collections.abc import Coroutine
 from typing import Any
 
 from robot import interface as ri
@@ -43,7 +44,7 @@ def map_meta(rendered: RenderedMap, msg: dict[str, Any], t: float) -> dict[str, 
     }
 
 
-def on_map(topic: ri.Topic, msg: dict[str, Any], t: float):
+def on_map(topic: ri.Topic, msg: dict[str, Any], t: float) -> Coroutine[Any, Any, None]:
     # A 4000x4000 grid is 16 M values: convert and render off the event loop.
     return _render_and_publish(msg, t, next(_sequence))
 

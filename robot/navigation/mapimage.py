@@ -11,10 +11,11 @@ from __future__ import annotations
 import hashlib
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 from django.conf import settings
@@ -38,7 +39,7 @@ def map_dir() -> Path:
 
 
 def _palette() -> list[int]:
-    table = [UNKNOWN_RGB] * 256
+    table: list[tuple[int, ...]] = [UNKNOWN_RGB] * 256
     for v in range(101):  # free .. occupied, shaded by probability
         f = v / 100.0
         table[v] = tuple(round(a + (b - a) * f) for a, b in zip(FREE_RGB, OCCUPIED_RGB, strict=True))
@@ -110,7 +111,7 @@ def encode_png(grid: np.ndarray) -> bytes:
     return out.getvalue()
 
 
-def _write_atomically(path: Path, write) -> None:
+def _write_atomically(path: Path, write: Callable[[BinaryIO], object]) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
         write(f)

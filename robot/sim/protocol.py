@@ -111,7 +111,7 @@ class Broker:
         self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
         self.latched: dict[str, str] = {}
         self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}
-        self.handlers: dict[str, list[Callable[[dict[str, Any]], None]]] = collections.defaultdict(list)
+        self.handlers: dict[str, list[Callable[[dict[str, Any]], object]]] = collections.defaultdict(list)
         self.received_msgs: dict[str, collections.deque[Received]] = {}
         self.received_counts: collections.Counter[str] = collections.Counter()
         self.services: dict[str, tuple[str, ServiceHandler]] = {}
@@ -150,7 +150,7 @@ class Broker:
             self.latched[topic] = messages.encode({"op": "publish", "topic": topic, "msg": msg})
         return self.latched.get(topic)
 
-    def on_publish(self, topic: str, handler: Callable[[dict[str, Any]], None]) -> None:
+    def on_publish(self, topic: str, handler: Callable[[dict[str, Any]], object]) -> None:
         self.handlers[topic].append(handler)
 
     def service(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
@@ -360,7 +360,7 @@ class Client:
         topic = frame["topic"]
         subs = self.broker.subs.get(topic)
         sub = subs.get(self.id) if subs else None
-        if sub is None:
+        if subs is None or sub is None:
             return
         if mid is None:
             sub.params.clear()
@@ -391,7 +391,8 @@ class Client:
                 raise ServiceError(f"Service {name} does not exist")
             srv_type, handler = entry
             request = messages.normalize_request(srv_type, args)
-            values, ok = handler(request), True
+            values: Any = handler(request)
+            ok = True
         except (ServiceError, messages.ConversionError) as exc:
             self.log(8, f"call_service {type(exc).__name__}: {exc}", mid)
             values, ok = str(exc), False

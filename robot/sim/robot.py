@@ -150,7 +150,7 @@ class SimRobot:
             for name, msg_type in server.topics.items():
                 b.declare(name, msg_type)
         b.declare("/connected_clients", "rosbridge_msgs/ConnectedClients")
-        on = {
+        on: dict[str, Callable[[dict[str, Any]], object]] = {
             "cmd_vel": self._cmd_vel, "initialpose": self._initialpose,
             "move_base_simple_goal": self._simple_goal, "register_event": self._register_event,
             "emotional_controller": self._emotional_controller, "set_emotional_state": self._set_emotion,
@@ -164,7 +164,7 @@ class SimRobot:
         b.on_publish(f"{self.move_base.name}/cancel", self.move_base.receive_cancel)
         b.on_publish(f"{self.navigation.name}/goal", self.navigation.receive_goal)
         b.on_publish(f"{self.navigation.name}/cancel", self.navigation.receive_cancel)
-        svc = {
+        svc: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
             "enable_motors": lambda r: self._set_motors(True), "disable_motors": lambda r: self._set_motors(False),
             "get_emotional_state": self._get_emotional_state,
             "rosapi_topics": lambda r: self._rosapi_topics(),

@@ -2,6 +2,8 @@ import asyncio
 import os
 import signal
 import socket
+from collections.abc import Awaitable
+from typing import Any
 
 from django.conf import settings
 from django.core.management.base import BaseCommand
@@ -17,7 +19,7 @@ class Command(BaseCommand):
     help = ("Run the robot link: the one rosbridge connection, fan-out to browsers and command relay. "
             "With REDIS_URL, several may run: they share a lease and only its holder connects.")
 
-    def handle(self, *args, **options) -> None:
+    def handle(self, *args: Any, **options: Any) -> None:
         asyncio.run(self._run())
 
     async def _run(self) -> None:
@@ -54,7 +56,7 @@ class Command(BaseCommand):
             await lease.close()
 
 
-async def _first(main, stop) -> bool:
+async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
     """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first."""
     main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
     done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)

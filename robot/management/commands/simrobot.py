@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import signal
+from typing import Any
 
 from django.core.management.base import BaseCommand, CommandParser
 
@@ -24,14 +25,14 @@ class Command(BaseCommand):
         parser.add_argument("--startup-s", type=float, default=15.0, help="seconds in the startup state")
         parser.add_argument("--demo-s", type=float, default=30.0, help="seconds a demo lasts")
 
-    def handle(self, *args: object, **opts: object) -> None:
+    def handle(self, *args: Any, **opts: Any) -> None:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
         logging.getLogger("websockets").setLevel(logging.WARNING)
         robot = SimRobot(
-            host=str(opts["host"]), port=int(opts["port"]), video_port=int(opts["video_port"]),  # type: ignore[arg-type]
-            map_name=str(opts["map"]), seed=int(opts["seed"]),  # type: ignore[arg-type]
-            pose_rate_hz=float(opts["pose_rate"]), startup_s=float(opts["startup_s"]),  # type: ignore[arg-type]
-            demo_s=float(opts["demo_s"]),  # type: ignore[arg-type]
+            host=str(opts["host"]), port=int(opts["port"]), video_port=int(opts["video_port"]),
+            map_name=str(opts["map"]), seed=int(opts["seed"]),
+            pose_rate_hz=float(opts["pose_rate"]), startup_s=float(opts["startup_s"]),
+            demo_s=float(opts["demo_s"]),
         )
         asyncio.run(self._serve(robot))
 
