@@ -105,7 +105,8 @@ class ExportView(APIView):
 
     @extend_schema(parameters=[s.ExportIn],
                    responses={(200, content_type): bytes for content_type, _ in FORMATS.values()},
-                   summary="Stream a topic's samples as CSV, JSON Lines or MCAP (JSON encoding, opens in Foxglove)")
+                   summary="Stream a topic's samples as CSV, JSON Lines, MCAP (JSON encoding, opens in Foxglove) "
+                           "or, for a recorded audio topic, WAV")
     def get(self, request: Request) -> StreamingHttpResponse:
         q = s.ExportIn(data=request.query_params)
         q.is_valid(raise_exception=True)

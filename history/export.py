@@ -1,4 +1,4 @@
-"""Streamed exports of one topic and time range: CSV, JSON Lines and MCAP (opens in Foxglove).
+"""Streamed exports of one topic and time range: CSV, JSON Lines, MCAP (opens in Foxglove), WAV (audio).
 
 Each format is a generator of byte chunks over a server-side iterator, so an export of
 millions of rows never sits in memory.
@@ -13,12 +13,14 @@ from collections.abc import Iterator
 from datetime import datetime
 from typing import Any
 
+from history.audio import export_wav
 from history.models import Sample
 
 FORMATS: dict[str, tuple[str, str]] = {
     "csv": ("text/csv; charset=utf-8", "csv"),
     "jsonl": ("application/x-ndjson", "jsonl"),
     "mcap": ("application/octet-stream", "mcap"),
+    "wav": ("audio/wav", "wav"),
 }
 CHUNK_ROWS = 2000
 
@@ -159,4 +161,4 @@ def export_mcap(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
     yield sink.drain()
 
 
-EXPORTERS = {"csv": export_csv, "jsonl": export_jsonl, "mcap": export_mcap}
+EXPORTERS = {"csv": export_csv, "jsonl": export_jsonl, "mcap": export_mcap, "wav": export_wav}

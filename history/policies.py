@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from django.conf import settings
 from django.db import transaction
 
+from history.audio import is_audio_type
 from history.models import Mode, RecordingSettings, TopicPolicy
 
 
@@ -60,8 +61,13 @@ def default_interval_set(*, seconds: float) -> RecordingSettings:
 
 @transaction.atomic
 def policies_add_discovered(*, topics: Iterable[tuple[str, str]], mode: str = Mode.OFF) -> list[str]:
-    """Add a policy for each discovered (name, type) that has none yet; return the names added."""
+    """Add a policy for each discovered (name, type) that has none yet; return the names added.
+
+    Audio topics are added switched off whatever the mode: people's voices are recorded only
+    when an admin turns that one topic on.
+    """
     known = set(TopicPolicy.objects.values_list("topic", flat=True))
-    new = [TopicPolicy(topic=name, msg_type=msg_type, mode=mode) for name, msg_type in topics if name not in known]
+    new = [TopicPolicy(topic=name, msg_type=msg_type, mode=Mode.OFF if is_audio_type(msg_type) else mode)
+           for name, msg_type in topics if name not in known]
     TopicPolicy.objects.bulk_create(new, ignore_conflicts=True)
     return [p.topic for p in new]

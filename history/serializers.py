@@ -10,6 +10,7 @@ from django.conf import settings
 from django.utils.dateparse import parse_datetime
 from rest_framework import serializers
 
+from history.audio import wav_format
 from history.downsample import BadField, parse_field
 from history.export import FORMATS
 from history.models import Mode
@@ -72,7 +73,17 @@ class SeriesIn(RangeIn):
 
 
 class ExportIn(RangeIn):
-    format = serializers.ChoiceField(choices=sorted(FORMATS), default="csv")
+    format = serializers.ChoiceField(
+        choices=sorted(FORMATS), default="csv",
+        help_text="wav: AudioData topics only (raw S16LE PCM), in the format of their recorded AudioInfo")
+
+    def validate(self, attrs: dict) -> dict:
+        attrs = super().validate(attrs)
+        if attrs["format"] == "wav":
+            _, problem = wav_format(attrs["topic"], attrs["end"])
+            if problem:
+                raise serializers.ValidationError({"format": problem})
+        return attrs
 
 
 class SeriesOut(serializers.Serializer):
