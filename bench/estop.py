@@ -78,16 +78,34 @@ class Driver:
         self.ws: ClientConnection | None = None
         self._task: asyncio.Task | None = None
 
-    async def start(self) -> None:
+    async def start(self, *, reconnect: bool = True) -> None:
+        await self._connect()
+        self._task = asyncio.ensure_future(self._hold(reconnect))
+
+    async def _connect(self) -> None:
         self.ws = await connect(f"ws://127.0.0.1:{self.stack.web_port}/ws/teleop/", origin=self.stack.url,
                                 additional_headers={"Cookie": self.cookie}, compression=None)
-        self._task = asyncio.ensure_future(self._hold())
 
-    async def _hold(self) -> None:
-        with contextlib.suppress(Exception):  # the web process may be killed under us
-            while True:
-                await self.ws.send(json.dumps(FORWARD))
-                await asyncio.sleep(0.05)
+    async def _hold(self, reconnect: bool) -> None:
+        while True:
+            reading = asyncio.ensure_future(self._read())
+            with contextlib.suppress(Exception):  # the web process may be killed under us
+                while True:
+                    await self.ws.send(json.dumps(FORWARD))
+                    await asyncio.sleep(0.05)
+            reading.cancel()
+            if not reconnect:
+                return
+            await asyncio.sleep(0.2)  # like a page's socket, which reconnects by itself
+            with contextlib.suppress(Exception):
+                await self._connect()
+
+    async def _read(self) -> None:
+        """Read what the server says (lock, refusals) like a page does: unread frames would
+        stop the client reading its socket, and its keepalive would then close it."""
+        with contextlib.suppress(Exception):
+            async for _ in self.ws:
+                pass
 
     async def stop(self) -> None:
         if self._task:
@@ -206,7 +224,7 @@ async def kill_web_while_driving(stack: Stack) -> list[float]:
     results = []
     for _ in range(KILLS):
         driver = Driver(stack, cookie)
-        await driver.start()
+        await driver.start(reconnect=False)
         before = sim.count()
         await asyncio.to_thread(sim.first_after, before, moving)
         await asyncio.sleep(0.5)  # steady driving at the teleop rate

@@ -284,11 +284,12 @@ class RobotLink:
         }
 
     async def set_command_path(self, ok: bool) -> None:
-        """What the last ping over the request channel found; a change is published at once."""
+        """What the last ping over the request channel found, published every time: a store
+        that came back empty from an outage has the link's status again within a second."""
         if ok != self.command_path:
             (log.info if ok else log.error)("command path %s", "answers again" if ok else "DOWN: a ping got no answer")
             self.command_path = ok
-            await self.publish_status()
+        await self.publish_status()
 
     async def publish_status(self) -> None:
         status = self.status()
