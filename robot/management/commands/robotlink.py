@@ -48,9 +48,17 @@ class Command(BaseCommand):
                 link, tasks = await start_link(embedded=False, lease=lease)
                 self.stdout.write(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
                 await _first(lease.hold(), stop.wait())
-                # Hand over first (the link refuses to publish from here on), then wind down.
-                await lease.release()
-                await stop_link(link, tasks)
+                if lease.held:
+                    # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
+                    renewing = asyncio.ensure_future(lease.hold())
+                    try:
+                        await stop_link(link, tasks)
+                    finally:
+                        renewing.cancel()
+                        await asyncio.gather(renewing, return_exceptions=True)
+                        await lease.release()
+                else:
+                    await stop_link(link, tasks)  # lost: the link publishes nothing more (fencing)
         finally:
             await lease.release()
             await lease.close()
