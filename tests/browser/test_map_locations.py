@@ -27,8 +27,14 @@ def test_arriving_at_a_place_only_the_server_knows_shows_its_name(sized_page, st
     page.on("dialog", lambda d: d.accept())
     login(page, stack, "otto", next_path="/map/")
     expect(page.locator("#map-view")).to_have_attribute("data-robot-x", re.compile(r"^-?\d"))
+    # A goal left by an earlier test would carry the robot off the pose set below.
+    api_post(page, stack, "/api/navigation/cancel/", {})
     # Somewhere none of the robot's own places is, facing up the map.
     api_post(page, stack, "/api/navigation/initial-pose/", {"x": -3.0, "y": 0.0, "yaw": math.pi / 2})
+    view = page.locator("#map-view")
+    # Save only once the page shows the robot there: "(none)" alone also holds wherever it was before.
+    expect(view).to_have_attribute("data-robot-x", re.compile(r"^-(2\.9[5-9]|3\.0[0-5])"), timeout=10_000)
+    expect(view).to_have_attribute("data-robot-y", re.compile(r"^-?0\.0[0-5]"), timeout=10_000)
     here = page.locator("#current-location")
     expect(here).to_have_text("(none)", timeout=10_000)
     page.fill("#save-pose-name", name)
