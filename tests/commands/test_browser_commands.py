@@ -17,7 +17,9 @@ def test_it_switches_to_manual_when_an_operator_clicks_manual(page, stack):
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     login(page, stack, "otto")
     state = page.locator('[data-field="smach.current"]')
-    # Start from a known state whatever earlier tests did to the shared robot.
+    # Start from a known state whatever earlier tests did to the shared robot (a restarted
+    # robot first finishes its startup).
+    expect(state).not_to_have_text("startup", timeout=30_000)
     page.click('[data-mode="stop"]')
     expect(page.locator('#card-mode [data-field="mode.request"]')).to_have_text("stop by otto · reached")
     expect(state).to_have_text("suspension")
