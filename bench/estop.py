@@ -30,6 +30,7 @@ sys.path.insert(0, str(ROOT))
 from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
 from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
+from tests.browser.support import login as page_login  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 from tests.support_processes import PrivateRedis  # noqa: E402
 
@@ -174,7 +175,6 @@ def banner_on_all_pages(stack: Stack) -> list[float]:
     from playwright.sync_api import sync_playwright
 
     from tests.browser.support import CHROMIUM_ARGS
-    from tests.stack import PASSWORD
 
     api = Api(stack, login(stack, "olga"))
     latencies: list[float] = []
@@ -182,11 +182,7 @@ def banner_on_all_pages(stack: Stack) -> list[float]:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         context = browser.new_context(viewport={"width": 1280, "height": 800})
         page = context.new_page()
-        page.goto(f"{stack.url}/accounts/login/")
-        page.fill("input[name=username]", "otto")
-        page.fill("input[name=password]", PASSWORD)
-        page.click("button[type=submit]")
-        page.wait_for_url(f"{stack.url}/")
+        page_login(page, stack, "otto")
         pages = [page] + [context.new_page() for _ in range(PAGES - 1)]
         for i, each in enumerate(pages):
             if i:

@@ -14,7 +14,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from tests.stack import PASSWORD, Stack  # noqa: E402
+from tests.browser.support import login  # noqa: E402
+from tests.stack import Stack  # noqa: E402
 
 OUT = ROOT / "docs" / "screenshots"
 CHROMIUM = os.environ.get("CHROMIUM_PATH") or shutil.which("chromium") or "/usr/bin/chromium"
@@ -44,11 +45,7 @@ def main() -> None:
             phone = width_name == "phone"
             context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1)
             page = context.new_page()
-            page.goto(f"{stack.url}/accounts/login/")
-            page.fill("input[name=username]", "ada")
-            page.fill("input[name=password]", PASSWORD)
-            page.click("button[type=submit]")
-            page.wait_for_url(f"{stack.url}/")
+            login(page, stack, "ada")
             for name, (path, ready) in PAGES.items():
                 page.goto(f"{stack.url}{path}")
                 page.wait_for_selector(ready, timeout=20_000)
