@@ -8,6 +8,7 @@ import logging
 import signal
 from collections.abc import Callable
 
+from .audio import MIC_CODINGS
 from .robot import SimRobot
 
 
@@ -21,6 +22,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--pose-rate", type=float, default=10.0)
     p.add_argument("--startup-s", type=float, default=15.0)
     p.add_argument("--demo-s", type=float, default=30.0)
+    p.add_argument("--mic-coding", default="wave", choices=list(MIC_CODINGS))
     p.add_argument("--quiet", action="store_true", help="log warnings only")
     return p.parse_args(argv)
 
@@ -42,7 +44,8 @@ def main(argv: list[str] | None = None) -> None:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("websockets").setLevel(logging.WARNING)
     robot = SimRobot(host=a.host, port=a.port, video_port=a.video_port, map_name=a.map, seed=a.seed,
-                     pose_rate_hz=a.pose_rate, startup_s=a.startup_s, demo_s=a.demo_s)
+                     pose_rate_hz=a.pose_rate, startup_s=a.startup_s, demo_s=a.demo_s,
+                     mic_coding=a.mic_coding)
     asyncio.run(serve(robot, lambda line: print(line, flush=True)))
 
 

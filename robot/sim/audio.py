@@ -1,5 +1,11 @@
 """The audio nodes: a text-to-speech queue and sound clip playback with feedback topics, the
-microphone (a tone, with its format latched) and the speakers (recording what operators sent)."""
+microphone (a tone as raw PCM or mp3, with its format latched) and the speakers (recording
+what operators sent).
+
+The mp3 microphone encodes with LAME (``lameenc``) as one continuous stream, the way
+audio_common's capture node does: chunks do not end on MPEG frame boundaries, and a listener
+that subscribes mid-stream gets frames whose bit reservoir points into frames it never saw.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +15,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import lameenc
 import numpy as np
 
 
@@ -86,20 +93,45 @@ def dominant_hz(pcm: bytes, rate: int) -> float:
     return float(np.fft.rfftfreq(len(samples), 1.0 / rate)[int(np.argmax(spectrum))])
 
 
+MIC_CODINGS = ("wave", "mp3")
+MP3_KBPS = 32
+
+
+def mp3_encoder(rate: int, kbps: int = MP3_KBPS) -> lameenc.Encoder:
+    encoder = lameenc.Encoder()
+    encoder.set_bit_rate(kbps)
+    encoder.set_in_sample_rate(rate)
+    encoder.set_channels(1)
+    encoder.set_quality(7)  # fast; a tone needs no more
+    return encoder
+
+
 class Microphone:
-    """Publishes a tone in ``chunk_s`` chunks, paced by the clock, while anyone subscribes."""
+    """Publishes a tone in ``chunk_s`` chunks, paced by the clock, while anyone subscribes:
+    raw S16LE (``coding="wave"``) or a continuous mp3 stream (``coding="mp3"``)."""
 
     def __init__(self, publish: Callable[[dict[str, object]], None], wanted: Callable[[], bool], *,
-                 freq_hz: float = 440.0, rate: int = 16000, chunk_s: float = 0.02) -> None:
+                 freq_hz: float = 440.0, rate: int = 16000, chunk_s: float = 0.02, coding: str = "wave") -> None:
+        if coding not in MIC_CODINGS:
+            raise ValueError(f"microphone coding must be one of {', '.join(MIC_CODINGS)}; got {coding!r}")
         self.publish, self.wanted = publish, wanted
         self.freq_hz, self.rate, self.chunk = freq_hz, rate, int(rate * chunk_s)
+        self.coding = coding
+        self.encoder = mp3_encoder(rate) if coding == "mp3" else None
         self.samples = 0  # published so far (the tone's phase)
         self.published = 0
         self._task: asyncio.Task[None] | None = None
 
     def info(self) -> dict[str, object]:
+        if self.coding == "mp3":
+            return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": MP3_KBPS,
+                    "coding_format": "mp3"}
         return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": self.rate * 16,
                 "coding_format": "wave"}
+
+    def encode(self, pcm: bytes) -> bytes:
+        """One chunk as it goes on the topic (mp3: whatever the encoder has finished, maybe nothing)."""
+        return bytes(self.encoder.encode(pcm)) if self.encoder is not None else pcm
 
     def start(self) -> None:
         if self.freq_hz > 0:
@@ -119,10 +151,11 @@ class Microphone:
             if loop.time() - due > 1.0:
                 due = loop.time()  # the loop stalled: start again rather than burst
             if self.wanted():
-                data = tone(self.freq_hz, self.samples, self.chunk, self.rate)
+                data = self.encode(tone(self.freq_hz, self.samples, self.chunk, self.rate))
                 self.samples += self.chunk
-                self.published += 1
-                self.publish({"data": base64.b64encode(data).decode()})
+                if data:
+                    self.published += 1
+                    self.publish({"data": base64.b64encode(data).decode()})
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Routes:
   GET  /stream?topic=T[&type=mjpeg&quality=Q&width=W&height=H]  multipart MJPEG, ~8 fps
   GET  /snapshot?topic=T[&quality=Q&width=W&height=H]           one JPEG
   GET  /stream_viewer?topic=T, GET /                              small HTML pages
-  GET  /sim/introspect                                            SimRobot.snapshot() as JSON
+  GET  /sim/introspect                                            the simulator's snapshot() as JSON
   GET  /sim/received?topic=T&last=N                               {"count", "messages": [{"t", "msg"}]}
   POST /sim/publish  {"topic", "msg", "count"?}                   publish to the topic's subscribers
 """
@@ -17,16 +17,14 @@ import json
 import logging
 import math
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 from PIL import Image, ImageDraw
 
+from .host import CameraHost
 from .server import set_nodelay
-
-if TYPE_CHECKING:
-    from .robot import SimRobot
 
 log = logging.getLogger("robot.sim.camera")
 
@@ -38,7 +36,7 @@ VIEW_M = (8.0, 6.0)  # metres of map shown around the robot
 class Renderer:
     """A bird's-eye "camera": the map around the robot, the robot, its plan and a timestamp."""
 
-    def __init__(self, robot: SimRobot) -> None:
+    def __init__(self, robot: CameraHost) -> None:
         self.robot = robot
         self._map_image: Image.Image | None = None
         self._cache: dict[tuple[int, int, int], tuple[float, bytes]] = {}
@@ -82,7 +80,7 @@ class Renderer:
             py = ((w.height - (y - w.origin_y) / res) - int(cy - hh)) * sy
             return px, py
 
-        path = [to_px(x, y) for x, y in r.navigator.remaining()]
+        path = [to_px(x, y) for x, y in r.plan()]
         if len(path) > 1:
             draw.line(path, fill=(40, 120, 230), width=3)
         px, py = to_px(b.x, b.y)
@@ -93,7 +91,7 @@ class Renderer:
         now = time.time()
         local = time.localtime(now)
         stamp = f"{time.strftime('%Y-%m-%d %H:%M:%S', local)}.{int(now * 1000) % 1000:03d} {time.strftime('%Z', local)}"
-        text = f"{stamp}  x={b.x:.2f} y={b.y:.2f} state={r.sm.state} emotion={r.emotions.name}"
+        text = f"{stamp}  x={b.x:.2f} y={b.y:.2f} {r.caption()}"
         draw.rectangle((0, 0, width, 16), fill=(0, 0, 0))
         draw.text((4, 2), text, fill=(255, 255, 255))
         out = io.BytesIO()
@@ -109,7 +107,7 @@ def _int(q: dict[str, list[str]], name: str, default: int) -> int:
 
 
 class VideoServer:
-    def __init__(self, robot: SimRobot) -> None:
+    def __init__(self, robot: CameraHost) -> None:
         self.robot = robot
         self.renderer = Renderer(robot)
         self.server: asyncio.Server | None = None

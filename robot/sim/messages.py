@@ -45,6 +45,8 @@ _DEFS: dict[str, str] = {
     "geometry_msgs/PoseWithCovariance": "geometry_msgs/Pose pose; float64[36] covariance",
     "geometry_msgs/PoseWithCovarianceStamped": "std_msgs/Header header; geometry_msgs/PoseWithCovariance pose",
     "geometry_msgs/PoseArray": "std_msgs/Header header; geometry_msgs/Pose[] poses",
+    "geometry_msgs/Polygon": "geometry_msgs/Point32[] points",
+    "geometry_msgs/PolygonStamped": "std_msgs/Header header; geometry_msgs/Polygon polygon",
     "geometry_msgs/Twist": "geometry_msgs/Vector3 linear; geometry_msgs/Vector3 angular",
     "geometry_msgs/TwistStamped": "std_msgs/Header header; geometry_msgs/Twist twist",
     "geometry_msgs/TwistWithCovariance": "geometry_msgs/Twist twist; float64[36] covariance",
@@ -56,6 +58,9 @@ _DEFS: dict[str, str] = {
         "time map_load_time; float32 resolution; uint32 width; uint32 height; geometry_msgs/Pose origin"
     ),
     "nav_msgs/OccupancyGrid": "std_msgs/Header header; nav_msgs/MapMetaData info; int8[] data",
+    "map_msgs/OccupancyGridUpdate": (
+        "std_msgs/Header header; int32 x; int32 y; uint32 width; uint32 height; int8[] data"
+    ),
     "nav_msgs/Path": "std_msgs/Header header; geometry_msgs/PoseStamped[] poses",
     "nav_msgs/Odometry": (
         "std_msgs/Header header; string child_frame_id; geometry_msgs/PoseWithCovariance pose; "
@@ -85,8 +90,18 @@ _DEFS: dict[str, str] = {
     "sensor_msgs/PointCloud": (
         "std_msgs/Header header; geometry_msgs/Point32[] points; sensor_msgs/ChannelFloat32[] channels"
     ),
+    "sensor_msgs/LaserScan": (
+        "std_msgs/Header header; float32 angle_min; float32 angle_max; float32 angle_increment; "
+        "float32 time_increment; float32 scan_time; float32 range_min; float32 range_max; float32[] ranges; "
+        "float32[] intensities"
+    ),
     "sensor_msgs/CompressedImage": "std_msgs/Header header; string format; uint8[] data",
     "rosaria/BumperState": "std_msgs/Header header; bool[] front_bumpers; bool[] rear_bumpers",
+    "diagnostic_msgs/KeyValue": "string key; string value",
+    "diagnostic_msgs/DiagnosticStatus": (
+        "byte level; string name; string message; string hardware_id; diagnostic_msgs/KeyValue[] values"
+    ),
+    "diagnostic_msgs/DiagnosticArray": "std_msgs/Header header; diagnostic_msgs/DiagnosticStatus[] status",
     "smach_msgs/SmachContainerStatus": (
         "std_msgs/Header header; string path; string[] initial_states; string[] active_states; "
         "string local_data; string info"
@@ -137,6 +152,9 @@ SERVICE_DEFS: dict[str, tuple[str, str]] = {
     "rosapi/HasParam": ("string name", "bool exists"),
     "rosapi/GetParamNames": ("", "string[] names"),
     "rosapi/MessageDetails": ("string type", "rosapi/TypeDef[] typedefs"),
+    "rosapi/Publishers": ("string topic", "string[] publishers"),
+    "rosapi/Subscribers": ("string topic", "string[] subscribers"),
+    "rosapi/NodeDetails": ("string node", "string[] subscribing; string[] publishing; string[] services"),
 }
 for _srv, (_req, _resp) in SERVICE_DEFS.items():
     _DEFS[f"{_srv}Request"] = _req

@@ -5,15 +5,13 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
+from .host import BridgeHost
 from .protocol import Client
-
-if TYPE_CHECKING:
-    from .robot import SimRobot
 
 log = logging.getLogger("robot.sim.server")
 
@@ -25,7 +23,7 @@ def set_nodelay(transport: Any) -> None:
 
 
 class RosbridgeServer:
-    def __init__(self, robot: SimRobot) -> None:
+    def __init__(self, robot: BridgeHost) -> None:
         self.robot = robot
         self.server: Server | None = None
         self.port = 0

@@ -109,9 +109,13 @@ class StateMachine:
         """(path, children, [(from, outcome, to)], container outcomes) of each container."""
         root = [(s, e, t if t != "idle" else "behaviour") for s, tr in TOP.items() for e, t in tr.items()]
         root.append(("behaviour", "succeeded", SUSPENSION))
-        inner = [(s, e, t if t != LEAVE else "succeeded") for s, tr in BEHAVIOUR.items()
-                 if s not in NAVIGATION_LEAVES for e, t in tr.items()]
-        nav = [(s, e, t) for s, tr in BEHAVIOUR.items() if s in NAVIGATION_LEAVES for e, t in tr.items()]
+        inner = [(s, e, "succeeded" if t == LEAVE else "navigation" if t in NAVIGATION_LEAVES else t)
+                 for s, tr in BEHAVIOUR.items() if s not in NAVIGATION_LEAVES for e, t in tr.items()]
+        # The navigation leaves end in the navigation container's outcomes, which the behaviour
+        # container maps to its states (as SMACH wires a nested container).
+        inner += [("navigation", e, t) for e, t in _NAV_OUT.items()]
+        nav = [(s, e, t if t in NAVIGATION_LEAVES else e) for s, tr in BEHAVIOUR.items()
+               if s in NAVIGATION_LEAVES for e, t in tr.items()]
         behaviour_children = [s for s in BEHAVIOUR if s not in NAVIGATION_LEAVES] + ["navigation"]
         return [
             ("/SM_ROOT", [*TOP, "behaviour"], root, []),

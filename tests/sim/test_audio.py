@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import base64
+import io
 import time
 
+import av
+import numpy as np
 import pytest
 import roslibpy
 
 from robot import interface as ri
 from robot.sim.audio import Heard, Speaker, dominant_hz, tone
+from robot.sim.harness import SimThread
 from tests.helpers import wait_until
-from tests.sim.support import Inbox
+from tests.sim.support import FAST, Inbox
 
 
 def _topic(ros, key: str) -> roslibpy.Topic:
@@ -36,6 +40,29 @@ def test_the_microphone_publishes_its_tone_and_latched_format_only_while_someone
     published = sim.robot.mic.published
     time.sleep(0.1)
     assert sim.robot.mic.published == published
+
+
+def test_an_mp3_microphone_publishes_one_continuous_mp3_stream_of_its_tone():
+    with SimThread(**FAST, mic_coding="mp3") as sim:
+        ros = roslibpy.Ros(sim.host, sim.port)
+        ros.run(timeout=10)
+        try:
+            info, mic = Inbox(), Inbox()
+            _topic(ros, "audio_info").subscribe(info)
+            info.wait(what="audio_info")
+            assert info.items[0]["coding_format"] == "mp3" and info.items[0]["sample_rate"] == 16000
+            _topic(ros, "audio").subscribe(mic)
+            mic.wait(lambda items: len(items) >= 40, what="a second of mp3 microphone")
+        finally:
+            ros.close()
+    stream = b"".join(base64.b64decode(m["data"]) for m in mic.items)
+    # Read back as a file by FFmpeg's own demuxer: the chunks join into one valid mp3 stream.
+    with av.open(io.BytesIO(stream), format="mp3") as container:
+        pcm = b"".join(frame.to_ndarray().astype("<f4").tobytes() for frame in container.decode(audio=0))
+    samples = (np.frombuffer(pcm, "<f4") * 32767).astype("<i2").tobytes()
+    assert len(samples) / 2 / 16000 > 0.5
+    assert abs(dominant_hz(samples, 16000) - 440) < 5
+    assert {len(base64.b64decode(m["data"])) for m in mic.items} != {144}  # not cut at frame boundaries
 
 
 def test_the_speakers_keep_what_arrives_for_measuring(sim, ros):

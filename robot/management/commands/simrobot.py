@@ -10,6 +10,7 @@ from typing import Any
 from django.core.management.base import BaseCommand, CommandParser
 
 from robot.sim import SimRobot
+from robot.sim.audio import MIC_CODINGS
 
 
 class Command(BaseCommand):
@@ -24,6 +25,8 @@ class Command(BaseCommand):
         parser.add_argument("--pose-rate", type=float, default=10.0, help="/robot_pose and /odom rate, Hz")
         parser.add_argument("--startup-s", type=float, default=15.0, help="seconds in the startup state")
         parser.add_argument("--demo-s", type=float, default=30.0, help="seconds a demo lasts")
+        parser.add_argument("--mic-coding", default="wave", choices=list(MIC_CODINGS),
+                            help="what the microphone sends: raw PCM (wave) or mp3")
 
     def handle(self, *args: Any, **opts: Any) -> None:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
@@ -32,7 +35,7 @@ class Command(BaseCommand):
             host=str(opts["host"]), port=int(opts["port"]), video_port=int(opts["video_port"]),
             map_name=str(opts["map"]), seed=int(opts["seed"]),
             pose_rate_hz=float(opts["pose_rate"]), startup_s=float(opts["startup_s"]),
-            demo_s=float(opts["demo_s"]),
+            demo_s=float(opts["demo_s"]), mic_coding=str(opts["mic_coding"]),
         )
         asyncio.run(self._serve(robot))
 

@@ -1,0 +1,167 @@
+"""What a simulated ROS node sees of the simulator: the ROS graph, the clock and /rosout.
+
+``SimRobot`` owns one ``Bus`` and hands it to every node's ``start``. A node never
+touches the broker, the websocket or another node's topics directly: it publishes and
+handles topics by their key in ``robot/interface.py``, answers services, asks the clock
+to call it back, and logs to /rosout. That is all a new node needs (see README.md).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+import math
+import time
+from collections.abc import Callable, Coroutine
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from robot import interface as ri
+
+from . import messages
+from .protocol import Broker, ServiceHandler
+
+log = logging.getLogger("robot.sim")
+
+Handler = Callable[[dict[str, Any]], object]
+TickFn = Callable[[float, float], None]  # (monotonic now, dt seconds)
+_LOG_LEVELS = {1: logging.DEBUG, 2: logging.INFO, 4: logging.WARNING, 8: logging.ERROR, 16: logging.CRITICAL}
+
+
+class Node(Protocol):
+    """One simulated ROS node (or a few that always go together).
+
+    ``names``: the ROS node names it plays (listed by /rosapi/nodes). ``publishes`` and
+    ``answers``: the interface keys of the topics it publishes and the services it answers
+    (tests hold them against ``robot/interface.py``). ``start`` wires the node to the bus —
+    handlers, services, periodic publishers, tasks — and may publish its first (latched)
+    messages; it runs once, on the simulator's loop, before any client can connect.
+    ``stop`` ends whatever ``start`` began outside the bus (threads); tasks started with
+    ``bus.spawn`` are cancelled by the simulator.
+    """
+
+    @property
+    def names(self) -> tuple[str, ...]: ...
+
+    @property
+    def publishes(self) -> tuple[str, ...]: ...
+
+    @property
+    def answers(self) -> tuple[str, ...]: ...
+
+    def start(self, bus: Bus) -> None: ...
+
+    def stop(self) -> None: ...
+
+
+@dataclass
+class Schedule:
+    period: float
+    fn: Callable[[], None]
+    due: float = 0.0
+
+
+class Clock:
+    """The simulator's one tick: every node's per-tick step, then the periodic publishers that are due."""
+
+    def __init__(self) -> None:
+        self.steps: list[TickFn] = []
+        self.schedules: list[Schedule] = []
+
+    def tick(self, now: float, dt: float) -> None:
+        for step in self.steps:
+            step(now, dt)
+        for s in self.schedules:
+            if now >= s.due:
+                s.due = s.due + s.period if now - s.due < s.period else now + s.period
+                s.fn()
+
+
+class Bus:
+    def __init__(self, broker: Broker, clock: Clock) -> None:
+        self.broker = broker
+        self.clock = clock
+        self.rosout_log: collections.deque[dict[str, Any]] = collections.deque(maxlen=200)
+        self.tasks: list[asyncio.Task[Any]] = []
+        self._warned: dict[str, float] = {}
+
+    # --- topics ------------------------------------------------------------------------
+
+    def publish(self, key: str, msg: dict[str, Any]) -> None:
+        """Publish on the interface topic ``key`` (latched if the interface says so)."""
+        t = ri.topic(key)
+        self.broker.publish(t.name, msg, latch=t.latched)
+
+    def publish_name(self, name: str, msg: dict[str, Any], latch: bool = False) -> None:
+        """Publish on a topic the interface does not name (action servers, rosbridge's own)."""
+        self.broker.publish(name, msg, latch=latch)
+
+    def wants(self, key: str) -> bool:
+        """Whether anyone subscribes to ``key``: costly messages are only built for a listener."""
+        return self.broker.wants(ri.topic(key).name)
+
+    def wants_name(self, name: str) -> bool:
+        return self.broker.wants(name)
+
+    def announce(self, key: str, msg: dict[str, Any]) -> None:
+        """A node publishing on a topic other nodes listen to: subscribers and in-process handlers get it."""
+        name = ri.topic(key).name
+        self.broker.publish(name, msg)
+        for handler in self.broker.handlers.get(name, ()):
+            handler(msg)
+
+    def on(self, key: str, handler: Handler) -> None:
+        """Call ``handler(msg)`` for every message a client (or ``announce``) publishes on ``key``."""
+        self.broker.on_publish(ri.topic(key).name, handler)
+
+    def on_name(self, name: str, handler: Handler) -> None:
+        self.broker.on_publish(name, handler)
+
+    def declare(self, name: str, msg_type: str) -> None:
+        """Make a topic the interface does not list known to rosapi and to clients."""
+        self.broker.declare(name, msg_type)
+
+    def latch_lazily(self, key: str, build: Callable[[], dict[str, Any]]) -> None:
+        """A latched topic whose (large) message is only built when first needed."""
+        self.broker.publish_lazily_latched(ri.topic(key).name, build)
+
+    # --- services ------------------------------------------------------------------------
+
+    def answer(self, key: str, handler: ServiceHandler) -> None:
+        """Answer the interface service ``key``; raise ``protocol.ServiceError`` to fail a call."""
+        s = ri.service(key)
+        self.broker.service(s.name, s.type, handler)
+
+    def answer_name(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
+        self.broker.service(name, srv_type, handler)
+
+    # --- clock -----------------------------------------------------------------------------
+
+    def every(self, period_s: float, fn: Callable[[], None]) -> None:
+        """Call ``fn()`` every ``period_s`` seconds of the simulator's tick."""
+        self.clock.schedules.append(Schedule(period_s, fn))
+
+    def each_tick(self, step: TickFn) -> None:
+        """Call ``step(now, dt)`` on every tick, before the periodic publishers."""
+        self.clock.steps.append(step)
+
+    def spawn(self, coro: Coroutine[Any, Any, Any]) -> None:
+        """Run a node's own loop on the simulator's event loop; the simulator cancels it on stop."""
+        self.tasks.append(asyncio.get_running_loop().create_task(coro))
+
+    # --- /rosout ---------------------------------------------------------------------------
+
+    def rosout(self, level: int, node: str, text: str) -> None:
+        msg = {"header": messages.header(), "level": level, "name": node, "msg": text, "file": "sim.py",
+               "function": "", "line": 0, "topics": ["/rosout"]}
+        self.rosout_log.append(msg)
+        log.log(_LOG_LEVELS.get(level, logging.INFO), "%s: %s", node, text)
+        self.publish("rosout", msg)
+
+    def warn_once(self, key: str, node: str, text: str, every_s: float = 2.0, level: int = 4) -> None:
+        """Log at most once every ``every_s`` seconds per ``key`` (a held joystick must not flood /rosout)."""
+        now = time.monotonic()
+        if now - self._warned.get(key, -math.inf) >= every_s:
+            self._warned[key] = now
+            self.rosout(level, node, text)
