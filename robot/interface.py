@@ -11,6 +11,7 @@ benchmarks use it too.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from enum import StrEnum
 from functools import cache
@@ -61,9 +62,15 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("map", "/map", "nav_msgs/OccupancyGrid", None, True, latched=True),
     _T("plan", "/move_base/NavfnROS/plan", "nav_msgs/Path", 2, True),
     _T("move_base_status", "/move_base/status", "actionlib_msgs/GoalStatusArray", 2, True),
+    # map overlays: subscribed while a map page shows them (robot/overlays/)
     _T("global_costmap", "/move_base/global_costmap/costmap", "nav_msgs/OccupancyGrid"),
     _T("local_costmap", "/move_base/local_costmap/costmap", "nav_msgs/OccupancyGrid"),
-    _T("particlecloud", "/particlecloud", "geometry_msgs/PoseArray", 1),
+    _T("global_costmap_updates", "/move_base/global_costmap/costmap_updates", "map_msgs/OccupancyGridUpdate"),
+    _T("local_costmap_updates", "/move_base/local_costmap/costmap_updates", "map_msgs/OccupancyGridUpdate"),
+    _T("particlecloud", "/particlecloud", "geometry_msgs/PoseArray", 5),
+    _T("scan", "/RosAria/sim_S3Series_1_laserscan", "sensor_msgs/LaserScan", 15),
+    _T("footprint", "/move_base/global_costmap/footprint", "geometry_msgs/PolygonStamped", 5),
+    _T("local_plan", "/move_base/TrajectoryPlannerROS/local_plan", "nav_msgs/Path", 10),
     _T("state_change", "/cyborg_controller/state_change", "cyborg_controller/SystemState", None, True, recent=20),
     _T("state_transitions", "/cyborg_controller/state_transitions", "std_msgs/String", None, True),
     _T("emotional_state", "/cyborg_controller/emotional_state", "cyborg_controller/EmotionalState", 4, True),
@@ -79,7 +86,11 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     # Every container publishes on this topic; keep each one's latest (no coalescing across paths).
     _T("smach_status", "/controller_viewer/smach/container_status", "smach_msgs/SmachContainerStatus", None, True,
        recent=8),
-    _T("smach_structure", "/controller_viewer/smach/container_structure", "smach_msgs/SmachContainerStructure", 1),
+    # Every container re-sends its structure periodically; the link keeps each path's (robot/introspection).
+    _T("smach_structure", "/controller_viewer/smach/container_structure", "smach_msgs/SmachContainerStructure", 1,
+       True),
+    # Components may report in separate arrays; the link keeps each one's latest (robot/introspection).
+    _T("diagnostics", "/diagnostics", "diagnostic_msgs/DiagnosticArray", 1, True),
     _T("rosout", "/rosout", "rosgraph_msgs/Log", None, True, recent=200),
     _T("tf", "/tf", "tf2_msgs/TFMessage", 5),
     _T("tf_static", "/tf_static", "tf2_msgs/TFMessage", None, latched=True),
@@ -108,6 +119,9 @@ _DEFAULT_SERVICES: tuple[Service, ...] = (
     Service("rosapi_services", "/rosapi/services", "rosapi/Services"),
     Service("rosapi_nodes", "/rosapi/nodes", "rosapi/Nodes"),
     Service("rosapi_get_time", "/rosapi/get_time", "rosapi/GetTime"),
+    Service("rosapi_publishers", "/rosapi/publishers", "rosapi/Publishers"),
+    Service("rosapi_subscribers", "/rosapi/subscribers", "rosapi/Subscribers"),
+    Service("rosapi_node_details", "/rosapi/node_details", "rosapi/NodeDetails"),
 )
 
 _DEFAULT_ACTIONS: tuple[Action, ...] = (
@@ -171,6 +185,23 @@ def monitored_topics() -> tuple[Topic, ...]:
 
 def topic_by_name(name: str) -> Topic | None:
     return next((t for t in _topics().values() if t.name == name), None)
+
+
+# A global ROS 1 graph name: "/" then tokens of a letter followed by letters, digits and "_".
+_TOPIC_NAME = re.compile(r"(/[A-Za-z][A-Za-z0-9_]*)+")
+TOPIC_NAME_MAX = 255
+
+
+def topic_name_problem(name: object) -> str | None:
+    """Why ``name`` is not a global ROS topic name, or None when it is one."""
+    if not isinstance(name, str) or not name:
+        return "a topic name is a non-empty text"
+    if len(name) > TOPIC_NAME_MAX:
+        return f"a topic name has at most {TOPIC_NAME_MAX} characters"
+    if not _TOPIC_NAME.fullmatch(name):
+        return (f"{name[:80]!r} is not a ROS topic name (like /robot_pose: a leading /, then words of "
+                "letters, digits and _ that start with a letter)")
+    return None
 
 
 def service(key: str) -> Service:
@@ -320,6 +351,10 @@ def speaker_info() -> dict[str, object]:
 NAVIGATION_ORDERS = ("navigation_go_to", "navigation_wander", "navigation_dock")
 
 LOG_LEVELS: dict[int, str] = {1: "DEBUG", 2: "INFO", 4: "WARN", 8: "ERROR", 16: "FATAL"}
+
+# diagnostic_msgs/DiagnosticStatus levels.
+DIAGNOSTIC_OK, DIAGNOSTIC_WARN, DIAGNOSTIC_ERROR, DIAGNOSTIC_STALE = 0, 1, 2, 3
+DIAGNOSTIC_LEVELS: dict[int, str] = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
 
 RECHARGE_STATES: dict[int, str] = {
     -1: "unknown", 0: "not charging", 1: "bulk", 2: "overcharge", 3: "float", 4: "balance",

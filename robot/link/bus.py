@@ -54,12 +54,21 @@ class EstopEngaged(RobotError):
     code = "estop"
 
 
-_ERRORS: dict[str, type[RobotError]] = {"offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged}
+class RobotNotFound(RobotError):
+    """The robot has no such thing (a topic rosapi does not know)."""
+
+    status_code = 404
+    code = "not_found"
+
+
+_ERRORS: dict[str, type[RobotError]] = {
+    "offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged, "not_found": RobotNotFound,
+}
 
 
 async def _is_online() -> bool:
-    status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
-    return bool(status_view(status)["robot_connected"])
+    view = status_view((await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY))
+    return bool(view["robot_connected"] or view.get("connecting"))
 
 
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
@@ -85,12 +94,16 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
     request = _new_request(op, timeout, fields)
     hosted = link_module.current
     try:
-        if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
-            reply = await asyncio.wait_for(_direct(hosted, request), timeout)
-        else:
-            if op not in ("reconnect", "subscribe") and not await _is_online():
-                raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
-            reply = await asyncio.wait_for(_via_layer(request), timeout)
+        # asyncio.timeout, not wait_for: wait_for runs the request as a task of its own, a loop
+        # turn later (a command would wait for it before anything is sent).
+        async with asyncio.timeout(timeout):
+            if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
+                reply = await _direct(hosted, request)
+            else:
+                # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
+                if op not in ("reconnect", "subscribe", "topics_watch") and not await _is_online():
+                    raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+                reply = await _via_layer(request)
     except TimeoutError:
         raise RobotTimeout(f"Command path down? The robot link did not answer in {timeout:g} s") from None
     if not reply.get("ok"):

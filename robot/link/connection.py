@@ -43,6 +43,12 @@ log = logging.getLogger(__name__)
 
 # While the robot is away, how often to look whether rosbridge's port is listening again.
 PORT_WATCH_S = 0.2
+LATCH_SETTLE_S = 3.0  # a stop's store write normally lands within milliseconds
+# After starting (a standby taking over), requests wait this long for the first connection instead of
+# being refused as "robot offline": a rolling restart of the links refuses nothing.
+FIRST_CONNECT_S = 3.0
+REPLY_MARGIN_S = 0.3
+_NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "subscribe", "estop_release"})  # answered at once
 # ROS 1 rosbridge answers a subscription it cannot make (a message package the robot lacks) only on
 # /rosout, as an error from its own node naming the request id roslibpy gave it.
 _ROSBRIDGE_NODE = "/rosbridge_websocket"
@@ -58,8 +64,14 @@ Operation = Callable[["RobotLink", LinkRequest], Awaitable[LinkReply]]
 
 _handlers: dict[str, Handler] = {}
 _operations: dict[str, Operation] = {}
+# Called with the link as it starts, before its first message (modules that listen to every topic).
+_start_hooks: list[Callable[[RobotLink], None]] = []
 ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 _array_keys: set[str] = set()
+# Holders of upstream subscriptions: the registry's monitored topics, and a plain subscribe
+# ("subscribe" requests from pages: registry topics subscribed on first demand, kept).
+REGISTRY_HOLDER = "registry"
+PINNED_HOLDER = "pinned"
 
 
 def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> None:
@@ -76,6 +88,11 @@ def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> Non
 
 def register_operation(op: str, operation: Operation) -> None:
     _operations[op] = operation
+
+
+def register_start(hook: Callable[[RobotLink], None]) -> None:
+    if hook not in _start_hooks:
+        _start_hooks.append(hook)
 
 
 def array_topics() -> frozenset[str]:
@@ -114,6 +131,9 @@ class RobotLink:
         self.ros: roslibpy.Ros | None = None
         self.loop: asyncio.AbstractEventLoop | None = None
         self._subscriptions: dict[str, roslibpy.Topic] = {}
+        # Who holds each upstream subscription (the registry, the recorder, watching pages, ...):
+        # the subscription goes when its last holder lets go.
+        self._holders: dict[str, set[str]] = {}
         self._publishers: dict[str, roslibpy.Topic] = {}
         self._tasks: list[asyncio.Task] = []
         self._coalescer: Coalescer | None = None
@@ -124,6 +144,7 @@ class RobotLink:
         self.guard: CmdVelGuard | None = None
         self.request_queue = request_queue  # scaled: requests arrive on this Redis list (robot.link.redisqueue)
         self.command_path = True  # until a ping over the request channel goes unanswered
+        self.connecting_until = 0.0  # epoch time: until then, a link not yet connected is still connecting
         self._latch_msg: dict[str, Any] = {}
 
     # --- lifecycle -------------------------------------------------------------------
@@ -132,22 +153,27 @@ class RobotLink:
         from twisted.internet import reactor
 
         self.loop = asyncio.get_running_loop()
+        self.connecting_until = time.time() + FIRST_CONNECT_S
         self._coalescer = Coalescer(self._send_update, loop=self.loop)
         self.guard = CmdVelGuard(self._publish_zero, loop=self.loop, **self._guard_settings)
         await self._sync_latch()
+        for hook in _start_hooks:
+            hook(self)
         self.ros = LinkRos(self.url, array_topics=array_topics())  # connects (and later reconnects) by itself
         self.ros.factory.maxDelay = self.max_backoff_s
         self.ros.factory.initialDelay = 0.5
-        self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready))
+        # The time is taken here, in the reactor's thread, so every message of the new connection
+        # (stamped there too) is later than `since`: what came before a robot restart is older.
+        self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready, time.time()))
         self.ros.on("close", lambda *_: self._threadsafe(self._on_close))
         if getattr(self.ros.factory, "_proto", None) is not None:
             # With the reactor already running (a second link in a process, tests) the
             # connection can open before the "ready" handler above was registered.
-            self._threadsafe(self._on_ready)
+            self._threadsafe(self._on_ready, time.time())
         if not reactor.running:
             self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)
         for t in self.topics:
-            self.subscribe(t.name, t.type)
+            self.subscribe(t.name, t.type, holder=REGISTRY_HOLDER)
         self._tasks.append(supervise("link.heartbeat", self._heartbeat))
         self._tasks.append(supervise("link.port-watch", self._watch_port))
         if serve_requests:
@@ -158,13 +184,18 @@ class RobotLink:
     async def stop(self) -> None:
         """Stop within a few seconds whatever the network does (every wait is bounded)."""
         self._stopped = True
-        if self._serving is not None and not self.request_queue:
-            # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
+        if self._serving is not None:
             try:
-                await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
-                await asyncio.wait_for(asyncio.shield(self._serving), 2)
+                if not self.request_queue:
+                    # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
+                    await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
+                # The loop ends by itself after its current pop (a Redis list pop returns within a
+                # second): a request it took is served, never lost with a cancelled pop.
+                await asyncio.wait_for(asyncio.shield(self._serving), redisqueue.POP_TIMEOUT_S + 1)
             except (TimeoutError, Exception):
                 log.warning("robot link request loop did not stop in time")
+        if self._inflight:
+            await asyncio.wait(set(self._inflight), timeout=2)  # answer what it took while the robot is there
         await cancel_within(self._tasks, 2)
         self._tasks.clear()
         if self.guard is not None:
@@ -194,21 +225,33 @@ class RobotLink:
 
     # --- subscriptions ---------------------------------------------------------------
 
-    def subscribe(self, name: str, msg_type: str) -> None:
-        """Subscribe once to ``name``; later calls for the same topic do nothing."""
-        if name in self._subscriptions or self.ros is None:
+    def subscribe(self, name: str, msg_type: str, *, holder: str = PINNED_HOLDER) -> None:
+        """Hold the upstream subscription to ``name`` for ``holder``: one rosbridge subscription per
+        topic however many holders; later calls for the same topic only add the holder."""
+        if self.ros is None:
+            return
+        self._holders.setdefault(name, set()).add(holder)
+        if name in self._subscriptions:
             return
         topic = roslibpy.Topic(self.ros, name, msg_type)
         topic.subscribe(lambda msg, _n=name, _t=msg_type: self._threadsafe(self._on_message, _n, _t, msg, time.time()))
         self._subscriptions[name] = topic
 
-    def unsubscribe(self, name: str) -> None:
-        """Drop an extra subscription; monitored topics stay subscribed."""
-        if any(t.name == name for t in self.topics):
-            return
+    def unsubscribe(self, name: str, *, holder: str = PINNED_HOLDER) -> None:
+        """Let go of ``holder``'s hold on ``name``; the upstream subscription goes with the last holder
+        (the registry's monitored topics are always held)."""
+        holders = self._holders.get(name)
+        if holders is not None:
+            holders.discard(holder)
+            if holders:
+                return
+            del self._holders[name]
         topic = self._subscriptions.pop(name, None)
         if topic is not None:
             topic.unsubscribe()
+
+    def holders(self, name: str) -> frozenset[str]:
+        return frozenset(self._holders.get(name, ()))
 
     @property
     def subscribed(self) -> set[str]:
@@ -256,11 +299,11 @@ class RobotLink:
                       refused["topic"], refused["error"].strip())
             self._spawn(self.publish_status())
 
-    def _on_ready(self) -> None:
+    def _on_ready(self, at: float) -> None:
         if self._stopped:
             return
         self.failed_subscriptions.clear()  # roslibpy subscribes again now; refusals come back on /rosout
-        self.connected, self.since, self.attempts = True, time.time(), 0
+        self.connected, self.since, self.attempts = True, at, 0
         log.info("robot link connected to %s", self.url)
         self._spawn(self.publish_status())
 
@@ -281,6 +324,7 @@ class RobotLink:
             "command_path": self.command_path, "failing_tasks": failing(),
             "holder": self.lease.holder if self.lease is not None else None,
             "failed_subscriptions": dict(self.failed_subscriptions),
+            "connecting_until": self.connecting_until,
         }
 
     async def set_command_path(self, ok: bool) -> None:
@@ -316,6 +360,11 @@ class RobotLink:
                 return
             if entry is not None:
                 self._latch_msg = dict(entry.get("msg") or {})
+            # A stop or release this link took moments ago may not be in the store yet: reading
+            # the store then would undo it, or write back a latch without who and when.
+            if not self.guard.settled(LATCH_SETTLE_S):
+                return
+            if entry is not None:
                 self.guard.sync(bool(self._latch_msg.get("latched")))
             elif self.guard.latched:
                 log.warning("the shared store lost the E-STOP latch: writing it back")
@@ -388,9 +437,15 @@ class RobotLink:
             self._spawn(self._handle(cast(LinkRequest, request)))
 
     async def _handle(self, request: LinkRequest) -> None:
-        if request.get("deadline", float("inf")) < time.time():
+        deadline = request.get("deadline", float("inf"))
+        if deadline < time.time():
             log.warning("dropped a %s request that arrived after its deadline", request.get("op"))
             return
+        # A link just started (a standby taking over) serves requests queued meanwhile once connected,
+        # or still says "offline" in time for the caller to hear it.
+        while (not self.connected and request.get("op") not in _NO_ROBOT_NEEDED
+               and time.time() < min(deadline - REPLY_MARGIN_S, self.connecting_until)):
+            await asyncio.sleep(0.02)
         reply = await self.execute(request)
         reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
         reply_to = request.get("reply_to") or ""
@@ -405,7 +460,7 @@ class RobotLink:
             self.reconnect()
             return {"ok": True}
         if op == "subscribe":
-            self.subscribe(request["topic"], request["msg_type"])
+            self.subscribe(request["topic"], request["msg_type"], holder=PINNED_HOLDER)
             return {"ok": True}
         if op == "ping":
             return {"ok": True}
@@ -449,6 +504,16 @@ class RobotLink:
         if topic is None:
             topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
         return topic
+
+    async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
+                   timeout: float | None = None) -> LinkReply:
+        """Call one of the robot's services from where the link runs (never blocks the loop)."""
+        if not self.connected or self.ros is None:
+            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        request: LinkRequest = {"service": service.name, "service_type": service.type, "args": args or {}}
+        if timeout is not None:
+            request["timeout"] = timeout
+        return await self._call_service(request)
 
     async def _call_service(self, request: LinkRequest) -> LinkReply:
         loop = asyncio.get_running_loop()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -38,6 +39,7 @@ class CmdVelGuard:
         self.hold_s = hold_s
         self.deadman_s = deadman_s
         self.latched = False
+        self.changed_at = 0.0  # monotonic time this link last engaged or released itself
         self.moving = False  # the last Twist that went out was non-zero
         self._deadman: asyncio.TimerHandle | None = None
         self._hold: asyncio.Task | None = None
@@ -56,12 +58,19 @@ class CmdVelGuard:
     def engage(self) -> None:
         """Zero now, zero at the teleop rate for the hold, refuse motion from here on."""
         self.latched = True
+        self.changed_at = time.monotonic()
         self._zero()
         if self._hold is None or self._hold.done():
             self._hold = self._loop.create_task(self._hold_zero())
 
     def release(self) -> None:
         self.latched = False
+        self.changed_at = time.monotonic()
+
+    def settled(self, grace_s: float) -> bool:
+        """No engage or release of this link's own for ``grace_s``: the shared store has had time
+        to record it, so where the two differ the store is the one to follow (or to repair)."""
+        return time.monotonic() - self.changed_at >= grace_s
 
     def sync(self, latched: bool) -> None:
         """The shared store's view (a press or release made while this link was unreachable)."""

@@ -9,12 +9,12 @@ from __future__ import annotations
 import asyncio
 import functools
 import logging
-import sys
 from collections.abc import Awaitable, Callable
 
 from channels.layers import get_channel_layer
 from django.conf import settings
 
+from cyborg_site.drain import daphne_reactor
 from robot.link import connection as link_module
 from robot.link import redisqueue
 from robot.link.bus import aping_over_layer
@@ -84,16 +84,10 @@ async def probe_command_path(link: RobotLink) -> None:
 def autostart_in_daphne() -> None:
     """In the Daphne server: stop the robot before exiting (SIGTERM) and, in the embedded
     default, start the link once the reactor runs."""
-    # Importing Daphne installs its reactor everywhere (tests too); only its server entry
-    # points mean this process is the web server.
-    if not any(name in sys.modules for name in ("daphne.cli", "daphne.management.commands.runserver")):
+    reactor = daphne_reactor()
+    if reactor is None:
         return
-    from twisted.internet import reactor
-    from twisted.internet.asyncioreactor import AsyncioSelectorReactor
-
-    if not isinstance(reactor, AsyncioSelectorReactor):
-        return
-    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)  # type: ignore[arg-type]
+    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)
     if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
         reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
 

@@ -49,6 +49,10 @@ class Lease:
                 await asyncio.sleep(self.ttl_s)
             started = time.monotonic()
             try:
+                if await self._redis_just_started():
+                    # The same wait, when the client reconnected by itself and never saw the outage.
+                    await asyncio.sleep(self.ttl_s)
+                    continue
                 acquired = await self.lock.acquire(blocking=False, token=self.token)
                 self._redis_ok()
                 if acquired:
@@ -114,6 +118,11 @@ class Lease:
         except RedisError:
             pass
         return False
+
+    async def _redis_just_started(self) -> bool:
+        """Redis (re)started less than a lease's time ago: it may have lost a live holder's key."""
+        info = await self.client.info("server")
+        return float(info.get("uptime_in_seconds", self.ttl_s)) < self.ttl_s
 
     def _held_from(self, started: float) -> None:
         self._valid_until = started + self.ttl_s

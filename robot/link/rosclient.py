@@ -20,6 +20,7 @@ from typing import Any
 import roslibpy
 from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 from roslibpy.core import Message
+from twisted.python import threadable
 
 from cyborg_site.text import scrub_json
 from robot.link.wire import LARGE_FRAME_BYTES, decode_frame, may_hold_surrogates
@@ -35,6 +36,14 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
     # frames then wait ~30-40 ms for the robot's delayed ACK. A class default is read in time.
     tcpNoDelay = True
     _began = 0.0
+
+    def send_message(self, payload: bytes) -> None:
+        # roslibpy hands every send to the reactor with callFromThread: a wake-up and a loop turn
+        # even from the reactor's own thread, where the link publishes. There, send at once.
+        if threadable.isInIOThread():
+            self.sendMessage(payload, isBinary=False, fragmentSize=None, sync=False, doNotCompress=False)
+        else:
+            super().send_message(payload)
 
     def onMessageBegin(self, isBinary: bool) -> None:
         self._began = time.perf_counter()

@@ -7,6 +7,7 @@ import pytest
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.bus import RobotOffline, apublish, arequest
+from robot.live.state import link_status
 from tests.helpers import async_wait_until, receive_frame, receive_until, ws_communicator
 
 BATTERY = "battery_soc"
@@ -161,6 +162,9 @@ async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_e
     await async_wait_until(lambda: "/lidar/points" in link.failed_subscriptions, timeout=10, what="the refusal")
     assert "velodyne_msgs" in link.failed_subscriptions["/lidar/points"]
     assert "/lidar/points" in link.status()["failed_subscriptions"]
+    # What /healthz lists (dashboard.health reads the link's status from the store).
+    await async_wait_until(lambda: "/lidar/points" in (link_status().get("failed_subscriptions") or {}),
+                           timeout=5, what="the refusal in the stored link status")
 
     before = link.since
     link.reconnect()

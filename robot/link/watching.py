@@ -1,0 +1,260 @@
+"""Any topic a page opens, where the link runs: one upstream subscription however many pages watch.
+
+Each web process holds one lease per topic its pages watch (``topics_watch``: the process's whole
+set of watched topics, sent on every change and renewed every ``WATCH_RENEW_S``); a lease not
+renewed for ``WATCH_LEASE_S`` is gone (its web process died). The link holds the upstream
+subscription while any lease lives; when the last one goes it waits ``TOPICS_IDLE_GRACE_S`` and
+then lets go (the subscription stays if the registry, the recorder or anyone else still holds it).
+
+While a topic is watched every message is offered to a coalescer (at most ``TOPICS_ECHO_MAX_HZ``,
+latest value wins), summarised (``robot.live.summary``) and announced once under its echo key to
+every web process's hub. ``topics_list`` answers the robot's topics with types and publishers
+(rosapi), ``topics_rate`` measures a topic's rate over a short window.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import time
+import weakref
+from typing import Any
+
+import numpy as np
+from django.conf import settings
+
+from robot import interface as ri
+from robot.link.connection import RobotLink, register_operation, register_start
+from robot.live.announce import aannounce
+from robot.live.fanout import Coalescer
+from robot.live.groups import LinkReply, LinkRequest, TopicUpdate
+from robot.live.summary import summarise
+from robot.supervisor import supervise
+
+log = logging.getLogger(__name__)
+
+WATCH_RENEW_S = 2.0
+WATCH_LEASE_S = 6.0
+SWEEP_S = 0.1
+HOLDER = "watch"  # this module's hold on the link's upstream subscriptions
+ECHO_PREFIX = "topic:"
+LIST_CACHE_S = 2.0
+BULKY_ITEMS = 10_000
+RATE_WINDOW_S = (0.5, 10.0)  # the shortest and longest measuring window a request may ask for
+_rate_ids = itertools.count()
+
+
+def echo_key(name: str) -> str:
+    """The live key under which a watched topic's messages reach the pages."""
+    return ECHO_PREFIX + name
+
+
+def is_echo_key(key: str) -> bool:
+    return key.startswith(ECHO_PREFIX)
+
+
+class Refused(Exception):
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+
+class Watches:
+    """The leases of one link and what they hold."""
+
+    def __init__(self, link: RobotLink) -> None:
+        self.link = link
+        self.leases: dict[str, dict[str, float]] = {}  # topic -> holder -> expiry (monotonic)
+        self.idle_since: dict[str, float] = {}  # topic -> when its last lease went (the grace period runs)
+        self.types: dict[str, str] = {}
+        self.counters: dict[int, tuple[str, list[float]]] = {}  # rate measurements: id -> (topic, receive times)
+        # The last message of every subscribed topic (a reference, summarised only when needed): a page that
+        # opens a topic someone else already holds still sees its latched or rare message at once.
+        self.last: dict[str, TopicUpdate] = {}
+        self._listing: tuple[float, list[dict[str, Any]]] | None = None
+        assert link.loop is not None
+        self.coalescer = Coalescer(self._send, loop=link.loop)
+        link.listeners.append(self.offer)
+        task = supervise("link.topic-watch", self._sweep_forever)
+        link._tasks.append(task)
+
+    # --- leases ----------------------------------------------------------------------
+
+    async def sync(self, holder: str, topics: list[str]) -> dict[str, dict[str, str]]:
+        """``holder`` now watches exactly ``topics``; returns the ones refused: name -> {code, error}."""
+        wanted = list(dict.fromkeys(topics))
+        for name, leases in self.leases.items():
+            if name not in wanted:
+                leases.pop(holder, None)
+        refused: dict[str, dict[str, str]] = {}
+        for name in wanted:
+            try:
+                msg_type = await self.resolve(name)
+            except Refused as exc:
+                refused[name] = {"code": exc.code, "error": exc.message}
+                continue
+            new = name not in self.leases
+            self.leases.setdefault(name, {})[holder] = time.monotonic() + WATCH_LEASE_S
+            self.idle_since.pop(name, None)
+            self.link.subscribe(name, msg_type, holder=HOLDER)
+            if new and name in self.last:
+                self.coalescer.offer(echo_key(name), settings.TOPICS_ECHO_MAX_HZ, self.last[name])
+        self.sweep()
+        return refused
+
+    async def resolve(self, name: str) -> str:
+        """The topic's type from the robot (rosapi), cached; Refused when it is no topic of the robot's."""
+        problem = ri.topic_name_problem(name)
+        if problem:
+            raise Refused("invalid", problem)
+        known = self.types.get(name)
+        if known:
+            return known
+        reply = await self.link.call(ri.service("rosapi_topic_type"), {"topic": name})
+        if not reply.get("ok"):
+            raise Refused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
+        msg_type = str((reply.get("values") or {}).get("type") or "")
+        if not msg_type:
+            raise Refused("not_found", f"The robot has no topic {name}")
+        self.types[name] = msg_type
+        return msg_type
+
+    def sweep(self) -> None:
+        now = time.monotonic()
+        for name, leases in list(self.leases.items()):
+            for holder in [h for h, expiry in leases.items() if expiry <= now]:
+                del leases[holder]
+            if not leases:
+                del self.leases[name]
+                self.idle_since[name] = now
+        grace = settings.TOPICS_IDLE_GRACE_S
+        for name, since in list(self.idle_since.items()):
+            if now - since >= grace:
+                del self.idle_since[name]
+                self.link.unsubscribe(name, holder=HOLDER)
+                if name not in self.link.subscribed:
+                    self.last.pop(name, None)
+                log.info("nobody watches %s any more: let go of its subscription", name)
+
+    async def _sweep_forever(self) -> None:
+        while True:
+            await asyncio.sleep(SWEEP_S)
+            self.sweep()
+
+    # --- messages (on the link's loop, for every message of every subscribed topic) ---
+
+    def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        for topic, times in self.counters.values():
+            if topic == name:
+                times.append(t)
+        if _bulky(msg):  # never keep a whole map or costmap alive just in case someone opens it
+            msg = summarise(msg)
+        update: TopicUpdate = {"type": "robot.update", "key": echo_key(name), "topic": name,
+                               "msg_type": msg_type, "msg": msg, "t": t}
+        self.last[name] = update
+        if name in self.leases:
+            self.coalescer.offer(update["key"], settings.TOPICS_ECHO_MAX_HZ, update)
+
+    async def _send(self, update: TopicUpdate) -> None:
+        event = dict(update)
+        event["msg"] = summarise(update["msg"])
+        await aannounce(update["key"], event, store=self.link.store)
+
+    # --- what the robot has ----------------------------------------------------------
+
+    async def listing(self) -> list[dict[str, Any]]:
+        """Every topic of the robot's: name, type, publishers (rosapi) and whether the link holds it."""
+        if self._listing is not None and time.monotonic() - self._listing[0] < LIST_CACHE_S:
+            found = self._listing[1]
+        else:
+            reply = await self.link.call(ri.service("rosapi_topics"))
+            if not reply.get("ok"):
+                raise Refused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
+            values = reply.get("values") or {}
+            names, types = list(values.get("topics") or []), list(values.get("types") or [])
+            self.types.update({n: t for n, t in zip(names, types, strict=False) if t})
+            publishers = await asyncio.gather(*(self._publishers(n) for n in names))
+            found = [{"name": n, "type": self.types.get(n, ""), "publishers": p}
+                     for n, p in zip(names, publishers, strict=True)]
+            self._listing = (time.monotonic(), found)
+        subscribed = self.link.subscribed
+        return [{**t, "subscribed": t["name"] in subscribed} for t in found]
+
+    async def _publishers(self, name: str) -> list[str] | None:
+        reply = await self.link.call(ri.service("rosapi_publishers"), {"topic": name})
+        if not reply.get("ok"):
+            return None  # an older rosapi without the service: shown as unknown
+        return [str(p) for p in (reply.get("values") or {}).get("publishers") or []]
+
+    async def rate(self, name: str, window_s: float) -> dict[str, Any]:
+        """Messages per second on ``name`` over ``window_s`` (from the gaps between receive times,
+        so a latched message delivered at subscription does not count as a burst)."""
+        msg_type = await self.resolve(name)
+        rate_id = next(_rate_ids)
+        holder = f"rate:{rate_id}"
+        times: list[float] = []
+        self.counters[rate_id] = (name, times)
+        self.link.subscribe(name, msg_type, holder=holder)
+        try:
+            await asyncio.sleep(window_s)
+        finally:
+            del self.counters[rate_id]
+            self.link.unsubscribe(name, holder=holder)
+        hz = (len(times) - 1) / (times[-1] - times[0]) if len(times) >= 2 and times[-1] > times[0] else 0.0
+        return {"topic": name, "type": msg_type, "hz": round(hz, 3), "messages": len(times), "window_s": window_s}
+
+
+def _bulky(msg: dict[str, Any]) -> bool:
+    """A message with a huge top-level array or text (a grid's cells, audio bytes): cheap to tell."""
+    return any(isinstance(v, list | str | np.ndarray) and len(v) > BULKY_ITEMS for v in msg.values())
+
+
+_watches: weakref.WeakKeyDictionary[RobotLink, Watches] = weakref.WeakKeyDictionary()
+
+
+def watches_of(link: RobotLink) -> Watches:
+    found = _watches.get(link)
+    if found is None:
+        found = _watches[link] = Watches(link)
+    return found
+
+
+def _refusal(exc: Refused) -> LinkReply:
+    return {"ok": False, "error_code": exc.code, "error": exc.message}
+
+
+async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
+    topics = request.get("topics")
+    if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
+        return {"ok": False, "error_code": "invalid", "error": "topics_watch needs a list of topic names"}
+    refused = await watches_of(link).sync(str(request.get("holder") or ""), topics)
+    return {"ok": True, "refused": refused}
+
+
+async def _list(link: RobotLink, request: LinkRequest) -> LinkReply:
+    try:
+        return {"ok": True, "values": await watches_of(link).listing()}
+    except Refused as exc:
+        return _refusal(exc)
+
+
+async def _rate(link: RobotLink, request: LinkRequest) -> LinkReply:
+    low, high = RATE_WINDOW_S
+    window = min(high, max(low, float(request.get("window_s") or 2.0)))
+    try:
+        return {"ok": True, "values": await watches_of(link).rate(str(request.get("topic") or ""), window)}
+    except Refused as exc:
+        return _refusal(exc)
+
+
+def _on_start(link: RobotLink) -> None:
+    watches_of(link)  # listening before the first message: a latched one is never missed
+
+
+def install() -> None:
+    register_start(_on_start)
+    register_operation("topics_watch", _watch)
+    register_operation("topics_list", _list)
+    register_operation("topics_rate", _rate)

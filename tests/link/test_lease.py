@@ -1,0 +1,112 @@
+"""The robot link's lease on a private redis-server: one holder, handed over on release, fenced
+publishes, taken back by its holder when Redis restarts empty."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+import redis
+from django.conf import settings
+
+from robot import interface as ri
+from robot.link.lease import Lease
+from tests.helpers import async_wait_until
+from tests.support_processes import PrivateRedis
+
+# Leases exist only when scaled: run with the services pass (on a redis-server of their own all the same).
+pytestmark = pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")
+KEY = "test:link-lease"
+TTL_S = 2.0  # the default ROBOT_LINK_LEASE_S
+
+
+@pytest.fixture
+def redis_server():
+    server = PrivateRedis().start()  # a standby waits a lease's time after Redis starts (see the last test)
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+async def leases(redis_server):
+    made: list[Lease] = []
+
+    def make(holder: str, ttl_s: float = TTL_S) -> Lease:
+        made.append(Lease(redis_server.url, KEY, holder=holder, ttl_s=ttl_s, poll_s=0.05))
+        return made[-1]
+
+    yield make
+    for lease in made:
+        await lease.close()
+
+
+async def _take_over(redis_server: PrivateRedis, lease: Lease) -> None:
+    """The key expires (the holder stalled) and ``lease`` takes it."""
+    redis.Redis.from_url(redis_server.url).delete(KEY)
+    await asyncio.wait_for(lease.acquire(), 5)
+
+
+async def test_one_holder_at_a_time_and_a_release_hands_over_at_once(leases):
+    a, b = leases("link-a"), leases("link-b")
+    await asyncio.wait_for(a.acquire(), 5)
+    renewing = asyncio.ensure_future(a.hold())
+    waiting = asyncio.ensure_future(b.acquire())
+    await asyncio.sleep(1.5 * TTL_S)  # the holder renews: the standby never gets it
+    assert not waiting.done() and await a.check()
+
+    await a.release()
+    await asyncio.wait_for(waiting, TTL_S)  # handed over, not left to expire
+    await asyncio.wait_for(renewing, 5)
+    assert b.held and await b.check()
+    assert not a.held and not await a.check()
+
+
+async def test_a_holder_whose_lease_was_taken_knows_at_its_next_check(leases, redis_server):
+    a, b = leases("link-a"), leases("link-b")
+    await asyncio.wait_for(a.acquire(), 5)
+    await _take_over(redis_server, b)
+
+    assert not await a.check()
+    assert a.lost.is_set() and not a.held
+    assert await b.check()
+
+
+async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, leases, redis_server):
+    a, b = leases("link-a"), leases("link-b")
+    await asyncio.wait_for(a.acquire(), 5)
+    renewing = asyncio.ensure_future(a.hold())
+    link.lease = a
+    speech = ri.topic("text_to_speech")
+    request = {"op": "publish", "topic": speech.name, "msg_type": speech.type}
+
+    reply = await link.execute({**request, "msg": {"data": "while holding"}})
+    assert reply["ok"], reply
+    await async_wait_until(lambda: {"data": "while holding"} in sim.received(speech.name), what="the command")
+
+    await _take_over(redis_server, b)
+    reply = await link.execute({**request, "msg": {"data": "after losing it"}})
+    assert not reply["ok"] and "lost its lease" in reply["error"]
+    await asyncio.sleep(0.5)
+    assert {"data": "after losing it"} not in sim.received(speech.name)
+    link.lease = None
+    await asyncio.wait_for(renewing, 5)  # the renewal finds the other token and gives up too
+
+
+async def test_after_redis_restarts_empty_the_holder_takes_its_lease_back(leases, redis_server):
+    ttl_s = 4.0  # Redis is back well inside it: the holder never stops holding
+    a, b = leases("link-a", ttl_s), leases("link-b", ttl_s)
+    await asyncio.wait_for(a.acquire(), 2 * ttl_s)
+    renewing = asyncio.ensure_future(a.hold())
+    waiting = asyncio.ensure_future(b.acquire())
+
+    redis_server.stop()
+    redis_server.start()
+    client = redis.Redis.from_url(redis_server.url)
+    await async_wait_until(lambda: client.get(KEY) == a.token, timeout=ttl_s, what="the holder's token back in Redis")
+    # The standby, whose client may have reconnected without noticing, waited a lease's time too.
+    await async_wait_until(lambda: client.info("server")["uptime_in_seconds"] > ttl_s, timeout=2 * ttl_s)
+    await asyncio.sleep(0.2)
+    assert await a.check() and not waiting.done()
+    waiting.cancel()
+    renewing.cancel()
+    await asyncio.gather(waiting, renewing, return_exceptions=True)
