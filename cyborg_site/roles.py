@@ -5,6 +5,8 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Any
 
+from django.utils.functional import empty
+
 
 class Role(StrEnum):
     VIEWER = "viewer"
@@ -18,6 +20,14 @@ def _groups(user: Any) -> set[str]:
         cached = set(user.groups.values_list("name", flat=True)) if user.is_authenticated else set()
         user._role_groups = cached
     return cached
+
+
+def roles_cached(user: Any) -> bool:
+    """Whether the role checks below can answer for ``user`` without a query (safe on an event loop)."""
+    # A lazy user (request.user, a socket's scope user) counts only once resolved: touching
+    # an unresolved one would run its loading query.
+    target = getattr(user, "_wrapped", user)
+    return target is not empty and getattr(target, "_role_groups", None) is not None
 
 
 def is_admin(user: Any) -> bool:

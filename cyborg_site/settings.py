@@ -112,8 +112,11 @@ DATABASES = {
 }
 if DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
     # WAL lets the recorder write while pages read; a busy timeout instead of "database is locked".
+    # Transactions take the write lock when they begin: a deferred one that read first cannot
+    # wait for it (SQLite refuses the upgrade at once if another connection wrote meanwhile).
     DATABASES["default"].setdefault("OPTIONS", {}).update(
-        {"timeout": 20, "init_command": "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;"}
+        {"timeout": 20, "transaction_mode": "IMMEDIATE",
+         "init_command": "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;"}
     )
     # Tests use a file, not shared-cache memory: there, background threads (recorder, link)
     # get "table is locked" at once instead of waiting out the busy timeout.
@@ -208,6 +211,10 @@ ROBOT_LINK_MAX_BACKOFF_S = env_float("ROBOT_LINK_MAX_BACKOFF_S", 2.0, minimum=0.
 ROBOT_LINK_LEASE_S = env_float("ROBOT_LINK_LEASE_S", 2.0, minimum=0.5)
 ROBOT_LINK_NAME = env_str("ROBOT_LINK_NAME", "")
 ROBOT_REQUEST_TIMEOUT_S = env_float("ROBOT_REQUEST_TIMEOUT_S", 5.0, minimum=0.1)
+# Topics page: a topic nobody watches (and nobody records) keeps its upstream subscription this long
+# before the link lets go; a watched topic reaches pages at most this often (latest value wins).
+TOPICS_IDLE_GRACE_S = env_float("TOPICS_IDLE_GRACE_S", 5.0, minimum=0)
+TOPICS_ECHO_MAX_HZ = env_float("TOPICS_ECHO_MAX_HZ", 20.0, minimum=0.5)
 # Values older than this are shown as stale (greyed) on the pages.
 STALE_AFTER_S = env_float("STALE_AFTER_S", 10.0, minimum=0.5)
 BATTERY_LOW_PERCENT = env_float("BATTERY_LOW_PERCENT", 20.0, minimum=0)
@@ -237,7 +244,8 @@ ESTOP_HOLD_S = env_float("ESTOP_HOLD_S", 1.0, minimum=0)
 
 # --- Two-way audio ---------------------------------------------------------------------
 # A talker whose audio stops arriving for this long is cut (push-to-talk let go, tab frozen).
-AUDIO_TALK_QUIET_S = env_float("AUDIO_TALK_QUIET_S", 0.4, minimum=0.05)
+# Chunks come every 20 ms; 0.3 s leaves room for a loaded server to still cut within 0.5 s.
+AUDIO_TALK_QUIET_S = env_float("AUDIO_TALK_QUIET_S", 0.3, minimum=0.05)
 # The talk lock frees itself this long after its last refresh (a web process died mid-talk).
 AUDIO_TALK_LOCK_TTL_S = env_float("AUDIO_TALK_LOCK_TTL_S", 3.0, minimum=0.5)
 

@@ -5,6 +5,7 @@ from django.urls import include, path
 from django.utils.functional import lazy
 from django.views.generic import RedirectView
 
+from dashboard.urls import api_urlpatterns as dashboard_api
 from history.urls import api_urlpatterns as history_api
 
 urlpatterns = [
@@ -16,6 +17,7 @@ urlpatterns = [
     path("accounts/logout/", auth_views.LogoutView.as_view(), name="logout"),
     path("api/", include("robot.api.urls")),
     path("api/history/", include(history_api)),
+    path("api/", include(dashboard_api)),
     path("history/", include("history.urls")),
     path("", include("dashboard.urls")),
 ]

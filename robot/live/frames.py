@@ -27,6 +27,20 @@ def batch_frame(fragments: Iterable[str]) -> str:
     return '{"kind":"updates","updates":[' + ",".join(fragments) + "]}"
 
 
+def ws_text_frame(text: str) -> bytes:
+    """``text`` as one unfragmented, unmasked websocket text frame (RFC 6455, 5.2): what a server
+    sends, the same bytes for every connection."""
+    payload = text.encode()
+    n = len(payload)
+    if n < 126:
+        header = bytes((0x81, n))
+    elif n < 1 << 16:
+        header = bytes((0x81, 126)) + n.to_bytes(2, "big")
+    else:
+        header = bytes((0x81, 127)) + n.to_bytes(8, "big")
+    return header + payload
+
+
 def status_text(status: dict[str, Any] | None) -> str:
     """The link's status as the browser sees it (offline when the link stopped reporting)."""
     view = status_view(status)

@@ -25,7 +25,18 @@ GOAL_KEY = "nav_goal"  # the goal this server sent last
 GOAL_STATUS_KEY = "nav_goal_status"  # what the robot reported for recent goals
 LOCATIONS_KEY = "nav_locations"  # sent on change only, never stored
 AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its word or its pose
+SMACH_GRAPH_KEY = "smach_graph"  # the state machine's containers as a graph (robot.introspection)
+SMACH_ACTIVE_KEY = "smach_active"  # its active states, and the events that leave them
+DIAGNOSTICS_KEY = "diagnostics_summary"  # the latest diagnostics of every component
 LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
+# Map overlays, made by the link from the robot's topics (robot.overlays): map-frame shapes, costmap tiles.
+OVERLAY_SCAN_KEY = "overlay_scan"
+OVERLAY_PARTICLES_KEY = "overlay_particles"
+OVERLAY_FOOTPRINT_KEY = "overlay_footprint"
+OVERLAY_LOCAL_PLAN_KEY = "overlay_local_plan"
+OVERLAY_GLOBAL_COSTMAP_KEY = "overlay_global_costmap"
+OVERLAY_LOCAL_COSTMAP_KEY = "overlay_local_costmap"
+OVERLAY_SONAR_KEY = "overlay_sonar"
 
 
 class SharedMessage(dict):
@@ -60,6 +71,7 @@ class LinkStatus(TypedDict):
     failing_tasks: list[str]  # the link process's supervised tasks waiting to restart
     holder: str | None  # scaled mode: the link process holding the lease
     failed_subscriptions: dict[str, str]  # topic -> why the robot refused it (since the last connect)
+    connecting_until: float  # epoch seconds: a link just started, not yet connected, is connecting until then
 
 
 class LinkRequest(TypedDict, total=False):
@@ -78,6 +90,9 @@ class LinkRequest(TypedDict, total=False):
     timeout: float
     listener: str  # audio: which listener's lease
     on: bool
+    holder: str  # topics_watch: which web process's leases
+    topics: list[str]  # topics_watch: every topic that holder's pages watch
+    window_s: float  # topics_rate: how long to count messages
 
 
 class LinkReply(TypedDict, total=False):
@@ -88,3 +103,4 @@ class LinkReply(TypedDict, total=False):
     error_code: str  # offline | timeout | failed | invalid
     values: Any
     listeners: int  # audio: how many listeners hold a lease
+    refused: dict[str, dict[str, str]]  # topics_watch: topic -> {code, error} for the ones not watched

@@ -7,10 +7,15 @@ work per message). Instead each web process keeps one hub on its event loop:
 - an update arrives already serialised (once per process) and is offered to each watching
   socket's slot: latest value wins for coalesced keys, every message is kept (bounded) for
   event-like keys;
-- at most once per UI tick, every socket with something new gets ONE frame carrying every
-  changed key, written with one cheap send; a socket whose previous write has not finished is
-  skipped until the next tick, so a slow browser gets the newest value later and never stalls
-  the others or the link.
+- paced per UI tick (on average at most one frame per tick, short bursts allowed), every socket
+  with something new gets ONE frame carrying every changed key, written with one cheap send; a
+  socket whose previous write has not finished is skipped until a later flush, so a slow browser
+  gets the newest value later and never stalls the others or the link.
+
+Under Daphne a socket comes with a ``FrameWriter`` (cyborg_site.direct_frames): sockets with the
+same pending updates share one encoded websocket frame, written with one ``send`` each, in the
+flush itself; "still writing" means the kernel has not taken the previous frame yet. Elsewhere
+(the test communicator) frames go through the consumer's ASGI send.
 
 Embedded, the robot link feeds the hub directly; scaled, each web process holds one Redis
 subscription that feeds it (robot.live.broadcast).
@@ -25,20 +30,32 @@ import logging
 import threading
 import time
 from collections.abc import Awaitable, Callable, Iterable
-from typing import Any
+from typing import Any, Protocol
 
-from robot.live.frames import batch_frame
+from robot.live.frames import batch_frame, ws_text_frame
 
 log = logging.getLogger(__name__)
 
 # Writes one websocket text frame (the ASGI send of the socket's consumer, wrapped).
 Send = Callable[[str], Awaitable[None]]
 
-# At most one frame per socket per tick; the first update after a quiet spell waits GATHER_S so
-# that messages the robot publishes together (pose, then odometry: separate rosbridge frames a
-# few ms apart) share a frame instead of the second one waiting a whole tick (bench/live_fanout.py).
+
+class FrameWriter(Protocol):
+    """Writes pre-encoded websocket frames to one connection (cyborg_site.direct_frames)."""
+
+    def write(self, frame: bytes) -> bool: ...
+    def backlog(self) -> int: ...
+
+
+# Frames are paced by a token bucket: on average at most one frame per socket per TICK_S, with
+# bursts of up to BURST frames at once, so an update rarely waits for the pace (a 10 Hz pose right
+# after a 1 Hz battery reading goes out at once instead of a tick later). The first update after a
+# quiet spell waits GATHER_S so that messages the robot publishes together (pose, then odometry:
+# separate rosbridge frames a few hundred microseconds apart) share a frame; one that misses it
+# costs a frame, not a tick (bench/live_fanout.py).
 TICK_S = 0.02
-GATHER_S = 0.006
+BURST = 3.0
+GATHER_S = 0.002
 # Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
 MAX_PENDING = 300
 _seq = itertools.count()
@@ -47,10 +64,11 @@ _seq = itertools.count()
 class Socket:
     """One websocket's watched keys and pending updates (pre-serialised JSON fragments)."""
 
-    __slots__ = ("dropped", "keys", "pending", "send", "sending", "status", "tracking")
+    __slots__ = ("dropped", "keys", "pending", "send", "sending", "status", "tracking", "writer")
 
-    def __init__(self, send: Send) -> None:
+    def __init__(self, send: Send, writer: FrameWriter | None = None) -> None:
         self.send = send
+        self.writer = writer
         self.keys: set[str] = set()
         self.pending: dict[Any, str] = {}  # key (latest wins) or (key, seq) (every message) -> fragment
         self.status: str | None = None  # the newest status frame not yet sent
@@ -86,14 +104,15 @@ class Hub:
         self._watchers: dict[str, set[Socket]] = {}
         self._dirty: set[Socket] = set()
         self._flush_at: float | None = None
-        self._last_flush = 0.0
+        self._tokens = BURST
+        self._tokens_at = time.monotonic()
         self._flushing: asyncio.Task | None = None
         self._thread = threading.get_ident()
 
     # --- sockets ---------------------------------------------------------------------
 
-    def attach(self, send: Send) -> Socket:
-        socket = Socket(send)
+    def attach(self, send: Send, writer: FrameWriter | None = None) -> Socket:
+        socket = Socket(send, writer)
         self.sockets.add(socket)
         return socket
 
@@ -114,6 +133,19 @@ class Hub:
             if key not in socket.keys:
                 socket.keys.add(key)
                 self._watchers.setdefault(key, set()).add(socket)
+
+    def unwatch(self, socket: Socket, keys: Iterable[str]) -> None:
+        """Stop sending ``keys`` to ``socket`` (updates already pending for them are dropped)."""
+        for key in keys:
+            if key not in socket.keys:
+                continue
+            socket.keys.discard(key)
+            socket.pending.pop(key, None)
+            watchers = self._watchers.get(key)
+            if watchers is not None:
+                watchers.discard(socket)
+                if not watchers:
+                    del self._watchers[key]
 
     # --- updates ---------------------------------------------------------------------
 
@@ -149,25 +181,66 @@ class Hub:
 
     # --- writing ---------------------------------------------------------------------
 
-    def _schedule(self) -> None:
+    def _refill(self, now: float) -> None:
+        self._tokens = min(BURST, self._tokens + (now - self._tokens_at) / self.tick_s)
+        self._tokens_at = now
+
+    def _schedule(self, at_least: float = GATHER_S) -> None:
         if self._flush_at is not None:
             return
         now = time.monotonic()
-        self._flush_at = max(now + GATHER_S, self._last_flush + self.tick_s)
-        self.loop.call_at(self.loop.time() + (self._flush_at - now), self._flush)
+        self._refill(now)
+        wait = max(at_least, (1.0 - self._tokens) * self.tick_s)
+        self._flush_at = now + wait
+        self.loop.call_at(self.loop.time() + wait, self._flush)
 
     def _flush(self) -> None:
         self._flush_at = None
         if self._flushing is not None and not self._flushing.done():
             self._schedule()  # the previous writes are still running: next tick
             return
-        self._last_flush = time.monotonic()
-        ready = [s for s in self._dirty if not s.sending]
-        self._dirty.difference_update(ready)
-        if self._dirty:
-            self._schedule()
-        if ready:
-            self._flushing = self.loop.create_task(self._write(ready))
+        self._refill(time.monotonic())
+        dirty = self._dirty
+        later: list[Socket] = []
+        via_send: list[Socket] = []
+        encoded: dict[Any, bytes] = {}  # one encoded frame per distinct content, shared by every socket
+        wrote = False
+        for socket in dirty:
+            writer = socket.writer
+            if writer is None:
+                if socket.sending:
+                    later.append(socket)
+                else:
+                    via_send.append(socket)
+                continue
+            backlog = writer.backlog()
+            if backlog > 0:
+                later.append(socket)  # the kernel has not taken its last frame: newest values next tick
+                continue
+            if backlog < 0:
+                continue  # closing; the consumer detaches it
+            if socket.status is not None:
+                frame = encoded.get(socket.status)
+                if frame is None:
+                    frame = encoded[socket.status] = ws_text_frame(socket.status)
+                writer.write(frame)
+                socket.status = None
+            if socket.pending:
+                content = tuple(socket.pending.values())
+                frame = encoded.get(content)
+                if frame is None:
+                    frame = encoded[content] = ws_text_frame(batch_frame(content))
+                socket.pending.clear()
+                writer.write(frame)
+            wrote = True
+        dirty.clear()
+        if wrote or via_send:
+            self._tokens -= 1.0  # polling slow sockets alone costs no frame
+        if later:
+            dirty.update(later)
+            self._schedule(at_least=0.0 if wrote or via_send else self.tick_s)  # stuck sockets: poll per tick
+        if via_send:
+            self._flushing = self.loop.create_task(self._write(via_send))
 
     async def _write(self, sockets: list[Socket]) -> None:
         for socket in sockets:

@@ -160,6 +160,8 @@ def status_view(status: dict[str, Any] | None, now: float | None = None) -> dict
     path = alive and bool(status.get("command_path", True))
     # "connected" only when a command can reach the robot: the robot is there and the link answers.
     return {**status, "connected": robot and path, "robot_connected": robot, "command_path": path,
+            # A link just started (taking over) queues commands for its first connection.
+            "connecting": alive and not robot and now < float(status.get("connecting_until") or 0),
             "link_running": alive}
 
 

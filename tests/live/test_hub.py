@@ -82,7 +82,7 @@ async def test_many_watchers_cost_one_serialisation_per_update(viewer, monkeypat
     monkeypatch.setattr(feed, "update_fragment", lambda update: calls.append(update["key"]) or real(update))
     communicators = [ws_communicator(viewer) for _ in range(20)]
     for communicator in communicators:
-        assert (await communicator.connect())[0]
+        assert (await communicator.connect(timeout=10))[0]
         await receive_until(communicator, lambda f: f["kind"] == "status")
         await communicator.send_json_to({"action": "watch", "keys": ["mode_request"]})
     await async_wait_until(lambda: len(get_hub()._watchers.get("mode_request", ())) == 20, timeout=5)
@@ -98,7 +98,7 @@ async def test_many_watchers_cost_one_serialisation_per_update(viewer, monkeypat
 
 async def test_updates_of_one_tick_reach_a_browser_in_one_frame(viewer):
     communicator = ws_communicator(viewer)
-    assert (await communicator.connect())[0]
+    assert (await communicator.connect(timeout=10))[0]
     await receive_until(communicator, lambda f: f["kind"] == "status")
     await communicator.send_json_to({"action": "watch", "keys": ["nav_goal", "nav_goal_status"]})
     await async_wait_until(lambda: len(get_hub()._watchers.get("nav_goal_status", ())) == 1, timeout=5)
@@ -116,7 +116,7 @@ async def test_the_first_snapshot_never_replaces_a_newer_live_value(viewer, monk
     store = get_store()
     await store.aput("nav_goal", dict(server_update("nav_goal", {"x": "stored"}, t=100.0)))
     communicator = ws_communicator(viewer)
-    assert (await communicator.connect())[0]
+    assert (await communicator.connect(timeout=10))[0]
     await receive_until(communicator, lambda f: f["kind"] == "status")
     read = store.aget_many
 
@@ -139,3 +139,101 @@ async def test_the_first_snapshot_never_replaces_a_newer_live_value(viewer, monk
     assert not communicator.__dict__.get("_unbatched") and await communicator.receive_nothing(timeout=0.5)
     assert seen in ([{"x": "live"}], [{"x": "stored"}, {"x": "live"}])
     await communicator.disconnect()
+
+
+class FakeWriter:
+    """A connection taking pre-encoded frames (cyborg_site.direct_frames.FrameWriter's face)."""
+
+    def __init__(self) -> None:
+        self.frames: list[bytes] = []
+        self.pending_bytes = 0  # what the kernel has not taken yet; -1: closing
+
+    def write(self, frame: bytes) -> bool:
+        self.frames.append(frame)
+        return True
+
+    def backlog(self) -> int:
+        return self.pending_bytes
+
+    def updates(self) -> list[dict]:
+        return [u for f in self.frames for u in decode_frame(f).get("updates", [])]
+
+
+def decode_frame(frame: bytes) -> dict:
+    """Parse a server frame with the websockets library's own protocol (an independent decoder)."""
+    from websockets.protocol import Protocol, Side, State
+
+    protocol = Protocol(Side.CLIENT, state=State.OPEN, max_size=None)
+    protocol.receive_data(frame)
+    (received,) = protocol.events_received()
+    assert received.fin
+    return json.loads(received.data)
+
+
+@pytest.mark.parametrize("size", [10, 200, 70_000])
+def test_an_encoded_frame_is_a_valid_websocket_text_frame_at_every_length_form(size):
+    text = json.dumps({"kind": "updates", "updates": [{"key": "rosout", "msg": {"data": "é" * size}}]})
+    assert decode_frame(frames.ws_text_frame(text)) == json.loads(text)
+
+
+async def test_sockets_with_the_same_updates_share_one_encoded_frame():
+    hub = Hub(asyncio.get_running_loop())
+    writers = [FakeWriter() for _ in range(3)]
+    sockets = [hub.attach(Recorder().send, writer) for writer in writers]
+    for socket in sockets:
+        hub.watch(socket, ["odom"])
+    hub.watch(sockets[2], ["battery_soc"])
+    hub.publish("odom", fragment("odom", 1, 1), 1)
+    hub.publish("battery_soc", fragment("battery_soc", 0.5, 2), 2)
+    await async_wait_until(lambda: all(w.frames for w in writers), timeout=2)
+    assert writers[0].frames[0] is writers[1].frames[0]  # encoded once for both
+    assert [u["key"] for u in writers[2].updates()] == ["odom", "battery_soc"]
+    assert [u["msg"]["data"] for u in writers[0].updates()] == [1]
+
+
+async def test_a_socket_the_kernel_has_not_drained_gets_the_newest_value_later_and_others_go_on():
+    hub = Hub(asyncio.get_running_loop(), tick_s=0.02)
+    slow, fast = FakeWriter(), FakeWriter()
+    slow.pending_bytes = 4096
+    for writer in (slow, fast):
+        hub.watch(hub.attach(Recorder().send, writer), ["odom"])
+    for i in range(5):
+        hub.publish("odom", fragment("odom", i, i), i)
+        await async_wait_until(lambda i=i: fast.updates() and fast.updates()[-1]["msg"]["data"] == i, timeout=2)
+    assert not slow.frames
+    slow.pending_bytes = 0
+    await async_wait_until(lambda: slow.frames, timeout=2)
+    assert [u["msg"]["data"] for u in slow.updates()] == [4]  # only the newest, once
+
+
+async def test_a_closing_connection_is_not_written_to():
+    hub = Hub(asyncio.get_running_loop())
+    closing, open_ = FakeWriter(), FakeWriter()
+    closing.pending_bytes = -1
+    for writer in (closing, open_):
+        hub.watch(hub.attach(Recorder().send, writer), ["odom"])
+    hub.publish("odom", fragment("odom", 1, 1), 1)
+    await async_wait_until(lambda: open_.frames, timeout=2)
+    await asyncio.sleep(0.1)
+    assert not closing.frames and not hub._dirty
+
+
+async def test_a_flood_of_updates_is_paced_to_about_one_frame_per_tick():
+    from robot.live.hub import BURST
+
+    hub = Hub(asyncio.get_running_loop(), tick_s=0.05)
+    writer = FakeWriter()
+    hub.watch(hub.attach(Recorder().send, writer), ["odom"])
+    loop = asyncio.get_running_loop()
+    start = loop.time()
+    i = 0
+    while loop.time() - start < 0.5:
+        hub.publish("odom", fragment("odom", i, i), i)
+        i += 1
+        await asyncio.sleep(0.002)
+    elapsed = loop.time() - start
+    await async_wait_until(lambda: writer.updates() and writer.updates()[-1]["msg"]["data"] == i - 1, timeout=2)
+    # A burst of BURST frames, then one per tick however fast the updates come (a slow machine
+    # only makes fewer frames); the newest value always arrives.
+    assert len(writer.frames) <= BURST + elapsed / 0.05 + 2
+    assert i > len(writer.frames)

@@ -1,0 +1,119 @@
+"""Which topics this web process's pages watch, held at the robot link by one lease per process.
+
+A page's socket opens a topic (``watch``) and closes it (``unwatch``, or by going away: ``drop``).
+The first socket of the process on a topic, and the last one leaving it, send the process's whole
+set to the link (``topics_watch``); a supervised loop renews it every ``WATCH_RENEW_S``, so a link
+that restarted (or took over) has every lease back within seconds and a dead web process's
+leases run out by themselves. Syncs go one at a time so the link sees them in order.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import socket
+import uuid
+import weakref
+from typing import Any
+
+from robot import interface as ri
+from robot.link.bus import RobotError, RobotOffline, arequest
+from robot.link.watching import WATCH_RENEW_S
+from robot.supervisor import supervise
+
+log = logging.getLogger(__name__)
+
+SYNC_TIMEOUT_S = 3.0
+
+
+class TopicRefused(Exception):
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+
+class LocalWatches:
+    def __init__(self) -> None:
+        self.holder = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
+        self.watchers: dict[str, set[Any]] = {}  # topic -> the sockets watching it
+        self._lock = asyncio.Lock()
+        self._renewing: asyncio.Task | None = None
+
+    async def watch(self, watcher: Any, name: str) -> None:
+        """``watcher`` watches ``name``; TopicRefused when the name is bad or the robot has no such topic.
+        While the robot is offline the watch stays and takes effect when it returns."""
+        problem = ri.topic_name_problem(name)
+        if problem:
+            raise TopicRefused("invalid", problem)
+        first = name not in self.watchers
+        self.watchers.setdefault(name, set()).add(watcher)
+        self._ensure_renewing()
+        if not first:
+            return
+        try:
+            refused = await self._sync()
+        except RobotOffline as exc:
+            raise TopicRefused("offline", exc.message) from None
+        except RobotError as exc:
+            self._forget(watcher, name)
+            raise TopicRefused(exc.code, exc.message) from None
+        if name in refused:
+            self._forget(watcher, name)
+            raise TopicRefused(refused[name].get("code", "failed"), refused[name].get("error", "refused"))
+
+    async def unwatch(self, watcher: Any, name: str) -> None:
+        if self._forget(watcher, name):
+            await self._sync_quietly()
+
+    async def drop(self, watcher: Any) -> None:
+        """``watcher`` went away: let go of everything it watched."""
+        gone = [name for name in list(self.watchers) if self._forget(watcher, name)]
+        if gone:
+            await self._sync_quietly()
+
+    def _forget(self, watcher: Any, name: str) -> bool:
+        """Remove one watcher; True when that was the topic's last one in this process."""
+        watchers = self.watchers.get(name)
+        if watchers is None or watcher not in watchers:
+            return False
+        watchers.discard(watcher)
+        if watchers:
+            return False
+        del self.watchers[name]
+        return True
+
+    async def _sync(self) -> dict[str, dict[str, str]]:
+        async with self._lock:
+            reply = await arequest("topics_watch", holder=self.holder, topics=sorted(self.watchers),
+                                   timeout=SYNC_TIMEOUT_S)
+        return dict(reply.get("refused") or {})
+
+    async def _sync_quietly(self) -> None:
+        try:
+            await self._sync()
+        except RobotError as exc:
+            log.info("could not tell the robot link which topics are watched (renewed shortly): %s", exc.message)
+
+    def _ensure_renewing(self) -> None:
+        if self._renewing is None or self._renewing.done():
+            self._renewing = supervise(f"topics.renew.{self.holder[-8:]}", self._renew_forever)
+
+    async def _renew_forever(self) -> None:
+        while self.watchers:
+            await asyncio.sleep(WATCH_RENEW_S)
+            if self.watchers:
+                await self._sync_quietly()
+
+
+_local: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, LocalWatches] = weakref.WeakKeyDictionary()
+
+
+def local_watches() -> LocalWatches:
+    """This process's watches (one per event loop: tests run several)."""
+    loop = asyncio.get_running_loop()
+    found = _local.get(loop)
+    if found is None:
+        found = _local[loop] = LocalWatches()
+    return found
