@@ -1,4 +1,9 @@
-"""The emergency stop over the API: ``GET|POST /api/robot/estop/``, ``POST /api/robot/estop/release/``."""
+"""The emergency stop over the API: ``GET|POST /api/robot/estop/``, ``POST /api/robot/estop/release/``.
+
+Synchronous views, like every robot API view (see ``robot.api.base``): the role check and the
+audit entry run in the request's thread, and the stop crosses to the event loop once —
+its steps and the latch it leaves come back together in the command's ``result``.
+"""
 
 from __future__ import annotations
 
@@ -8,9 +13,9 @@ from rest_framework import serializers
 from rest_framework.request import Request
 from rest_framework.response import Response
 
-from robot.api.base import RobotAPIView, source_of
+from robot.api.base import RobotAPIView, run
 from robot.api.common import error_responses
-from robot.teleop.estop import STEPS, estop_release, estop_run
+from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
 from robot.teleop.latch import alatch
 
 
@@ -60,8 +65,15 @@ class EstopView(RobotAPIView):  # never throttled: a stop always goes through
         "it. Operators and admins only.",
     )
     def post(self, request: Request) -> Response:
-        report = async_to_sync(estop_run)(user=request.user, source=source_of(request))
-        body = {**report.as_dict(), "latch": async_to_sync(alatch)().as_msg()}
+        command = estop_command(request.user)
+        try:
+            run(request, command)
+        except EstopIncomplete:
+            pass  # every step was tried: the report says which failed
+        report = estop_outcome(command)
+        # Read again (a second hop) only if the store could not be read after the stop.
+        latch = command.result["latch"] if "latch" in command.result else async_to_sync(alatch)()
+        body = {**report.as_dict(), "latch": latch.as_msg()}
         if not report.ok:
             body.update(detail="Emergency stop incomplete: " + report.summary(), code="partial")
         return Response(body, status=200 if report.ok else 502)
@@ -78,5 +90,6 @@ class EstopReleaseView(RobotAPIView):
     )
     def post(self, request: Request) -> Response:
         confirm = request.data.get("confirm") if isinstance(request.data, dict) else None
-        latch = async_to_sync(estop_release)(user=request.user, source=source_of(request), confirm=confirm)
-        return Response(latch.as_msg())
+        command = release_command(request.user, confirm)
+        run(request, command)
+        return Response(command.result["latch"].as_msg())

@@ -4,7 +4,7 @@ from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
 from rest_framework.permissions import IsAuthenticated
 from rest_framework.routers import SimpleRouter
 
-from robot.api import commands, navigation
+from robot.api import commands, navigation, topics
 from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
 from robot.api.base import API_AUTHENTICATION
@@ -33,6 +33,8 @@ urlpatterns = [
     path("navigation/cancel/", navigation.cancel_view, name="api-navigation-cancel"),
     path("navigation/status/", navigation.status_view, name="api-navigation-status"),
     path("navigation/initial-pose/", navigation.initial_pose_view, name="api-navigation-initial-pose"),
+    path("topics/", topics.topics_view, name="api-topics"),
+    path("topics/rate/", topics.rate_view, name="api-topics-rate"),
     *router.urls,
     path("schema/", SpectacularAPIView.as_view(authentication_classes=API_AUTHENTICATION,
                                                  permission_classes=[IsAuthenticated]), name="api-schema"),

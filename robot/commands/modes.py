@@ -46,6 +46,9 @@ from robot.teleop.latch import ensure_released
 # on by themselves while we walk).
 STEP_TIMEOUT_S = 2.0
 MAX_STEPS = 8
+# How long to wait for the robot's first report when it has said nothing since the link
+# (re)connected: its SMACH status repeats about once a second.
+SETTLE_S = 1.5
 
 
 def sequence_pause_s(mode: ri.Mode) -> float:
@@ -53,7 +56,7 @@ def sequence_pause_s(mode: ri.Mode) -> float:
 
 
 def longest_change_s(mode: ri.Mode) -> float:
-    return sequence_pause_s(mode) + (MAX_STEPS + 1) * STEP_TIMEOUT_S
+    return SETTLE_S + sequence_pause_s(mode) + (MAX_STEPS + 1) * STEP_TIMEOUT_S
 
 
 def state_reached(mode: ri.Mode, state: str) -> bool:
@@ -133,7 +136,7 @@ class _Walk:
 
 async def _change(mode: ri.Mode) -> str:
     watch = StateWatch()
-    await watch.start()
+    await watch.start(settle_s=SETTLE_S)
     walk = _Walk(mode, watch)
     by_server = settings.MODE_COMMANDER != "robot"
     emotion_on = ri.MODE_ENTRY[mode][0]

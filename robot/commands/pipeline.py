@@ -4,10 +4,19 @@ outcome or error.
 
 A command is a ``Command``: ``check`` validates the input *before* anything is sent (it may
 read the database, e.g. preset names) and ``send`` does the robot work on the event loop.
-Two faces run it: ``run_command`` for synchronous callers (API views, the admin) keeps the
-role check, ``check`` and the audit write in the caller's thread and crosses to the event
-loop once, for ``send``; ``arun`` for asynchronous callers (websockets, tasks) hops to a
-thread for the database work instead.
+
+Each face crosses between the request's thread and the event loop at most once on the way
+to the robot, because every crossing queues behind whatever else that thread or loop is doing:
+
+- ``run_command``, the synchronous face (API views, the admin): the role check, ``check``
+  and the audit entry run in the caller's thread, where Django's ORM is at home; ``send``
+  crosses to the event loop once. API views are synchronous for this reason
+  (``robot.api.base``).
+- ``arun``, the asynchronous face (websockets, tasks): ``send`` runs where it is. The role
+  check reads groups the user object caches (``cyborg_site.roles``); a websocket consumer
+  reads them when it connects, so for its commands the check runs on the loop and the only
+  hop is the audit write. A caller whose user has no cached roles, or a command with a
+  ``check``, does the role check and ``check`` together in one thread hop before sending.
 """
 
 from __future__ import annotations
@@ -18,7 +27,7 @@ from typing import Any
 
 from asgiref.sync import async_to_sync, sync_to_async
 
-from cyborg_site.roles import is_operator
+from cyborg_site.roles import is_operator, roles_cached
 from robot.commands.audit import audit_record
 from robot.link.bus import RobotError
 
@@ -70,15 +79,31 @@ class Command:
     result: dict[str, Any] = field(default_factory=dict)
 
 
-def run_command(command: Command, *, user: Any, source: str) -> str:
-    """The synchronous face: one hop onto the event loop, for ``send``."""
-    audit = {"user": user, "source": source, "action": command.action, "params": command.params}
-    if not command.allowed(user):
+def _audit_fields(command: Command, user: Any, source: str) -> dict[str, Any]:
+    return {"user": user, "source": source, "action": command.action, "params": command.params}
+
+
+def _prepare(command: Command, audit: dict[str, Any]) -> Any:
+    """Role check, then ``check``: what ``send`` gets; a refusal or bad input is audited and raised."""
+    if not command.allowed(audit["user"]):
         error = Forbidden(command.refusal)
         audit_record(**audit, ok=False, outcome=error.message, error_code=error.code)
         raise error
     try:
-        checked = command.check()
+        return command.check()
+    except RobotError as exc:
+        audit_record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
+        raise
+
+
+_aprepare = sync_to_async(_prepare, thread_sensitive=True)
+
+
+def run_command(command: Command, *, user: Any, source: str) -> str:
+    """The synchronous face: one hop onto the event loop, for ``send``."""
+    audit = _audit_fields(command, user, source)
+    checked = _prepare(command, audit)
+    try:
         outcome = async_to_sync(command.send)(checked) or "ok"
     except RobotError as exc:
         audit_record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
@@ -88,15 +113,17 @@ def run_command(command: Command, *, user: Any, source: str) -> str:
 
 
 async def arun(command: Command, *, user: Any, source: str) -> str:
-    """The asynchronous face: the database work (role, check, audit) runs in a thread."""
-    audit = {"user": user, "source": source, "action": command.action, "params": command.params}
-    # The role check may query the user's groups: never from the event loop itself.
-    if not await sync_to_async(command.allowed, thread_sensitive=True)(user):
-        error = Forbidden(command.refusal)
-        await _record(**audit, ok=False, outcome=error.message, error_code=error.code)
-        raise error
+    """The asynchronous face: at most one thread hop before sending, one for the audit entry."""
+    audit = _audit_fields(command, user, source)
+    if command.check is _unchecked and roles_cached(user):
+        if not command.allowed(user):  # reads only the cached roles: no database on the loop
+            error = Forbidden(command.refusal)
+            await _record(**audit, ok=False, outcome=error.message, error_code=error.code)
+            raise error
+        checked = None
+    else:
+        checked = await _aprepare(command, audit)
     try:
-        checked = None if command.check is _unchecked else await sync_to_async(command.check, thread_sensitive=True)()
         outcome = await command.send(checked) or "ok"
     except RobotError as exc:
         await _record(**audit, ok=False, outcome=exc.message, error_code=exc.code)

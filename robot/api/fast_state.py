@@ -1,0 +1,84 @@
+"""``GET /api/robot/state/`` for a recently seen token, answered on the event loop.
+
+Scripts poll the state. Through Django that costs the ASGI handler's thread hops (its middleware
+chain runs in a thread, the synchronous DRF view crosses back to the loop for the store), the
+whole middleware chain and DRF's machinery, for a read of the in-memory or Redis store.
+
+``FastStateApp`` sits in front of Django's ASGI application and answers exactly one kind of
+request itself: ``GET`` on the state path, no query string, an ``Authorization: Token`` header
+whose token the per-process cache (robot.api.tokens) already trusts, JSON acceptable. The answer
+is the view's: the same data (``arobot_state``), the same renderer, and the response headers the
+site's middleware would add (host check, security headers, frame options). Anything else, and
+every token the cache does not know yet, goes to Django unchanged: that is where a token is
+checked against the database (and cached), where errors get the API's error shape, and where the
+browsable API and sessions live.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+from django.core.exceptions import DisallowedHost
+from django.core.handlers.asgi import ASGIHandler, ASGIRequest
+from django.http import HttpResponse
+from django.middleware.clickjacking import XFrameOptionsMiddleware
+from django.middleware.security import SecurityMiddleware
+
+from robot.api.errors import SafeJSONRenderer
+from robot.api.tokens import CachedTokenAuthentication
+from robot.commands.selectors import arobot_state
+
+STATE_PATH = "/api/robot/state/"
+_JSON_ACCEPT = frozenset({"", "*/*", "application/json", "application/*"})
+
+
+def _never_called(request: Any) -> HttpResponse:
+    raise AssertionError("the fast path builds its own response")
+
+
+class FastStateApp:
+    """ASGI: the state of a cached token's caller, without Django's handler; the rest to ``django_app``."""
+
+    def __init__(self, django_app: ASGIHandler) -> None:
+        self.django_app = django_app
+        self._renderer = SafeJSONRenderer()
+        self._security = SecurityMiddleware(_never_called)
+        self._frames = XFrameOptionsMiddleware(_never_called)
+
+    async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
+        if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
+            response = await self.answer(scope)
+            if response is not None:
+                await self.django_app.send_response(response, send)
+                return
+        await self.django_app(scope, receive, send)
+
+    async def answer(self, scope: dict[str, Any]) -> HttpResponse | None:
+        """The response, or None when Django must answer (unknown token, other formats, bad host…)."""
+        if scope.get("query_string") or scope.get("root_path"):
+            return None
+        authorization = accept = b""
+        for name, value in scope["headers"]:
+            if name == b"authorization":
+                authorization = value
+            elif name == b"accept":
+                accept = value
+        if accept.split(b";", 1)[0].strip().decode("latin1") not in _JSON_ACCEPT:
+            return None
+        scheme, _, key = authorization.decode("latin1").partition(" ")
+        if scheme.lower() != "token" or CachedTokenAuthentication.cached_user(key.strip()) is None:
+            return None
+        request = ASGIRequest(scope, io.BytesIO())
+        try:
+            request.get_host()  # ALLOWED_HOSTS, as CommonMiddleware checks it
+        except DisallowedHost:
+            return None
+        if self._security.process_request(request) is not None:  # an HTTPS redirect
+            return None
+        response = HttpResponse(self._renderer.render(await arobot_state()), content_type="application/json")
+        response["Vary"] = "Accept"
+        response["Allow"] = "GET, HEAD, OPTIONS"
+        response["Content-Length"] = str(len(response.content))  # as CommonMiddleware sets it
+        self._frames.process_response(request, response)
+        return self._security.process_response(request, response)

@@ -1,0 +1,104 @@
+"""The state API answered on the event loop for a token the process already trusts: the same answer
+as the DRF view, no Django handler, and every other request still goes to Django."""
+
+import json
+
+import pytest
+from channels.testing import HttpCommunicator
+from rest_framework.authtoken.models import Token
+
+from robot.api import fast_state
+from robot.api.tokens import CachedTokenAuthentication
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+PATH = "/api/robot/state/"
+
+
+@pytest.fixture(autouse=True)
+def _empty_token_cache():
+    CachedTokenAuthentication._cache.clear()
+    yield
+    CachedTokenAuthentication._cache.clear()
+
+
+@pytest.fixture
+def django_calls(monkeypatch):
+    """Requests that reached Django's handler (the fast path's fallback)."""
+    from cyborg_site.asgi import application
+
+    app = application.application_mapping["http"]
+    while not isinstance(app, fast_state.FastStateApp):  # under the request counter (cyborg_site.drain)
+        app = app.app
+    calls = []
+    real = app.django_app
+
+    class Spy:
+        send_response = real.send_response
+
+        async def __call__(self, scope, receive, send):
+            calls.append(scope["path"])
+            await real(scope, receive, send)
+
+    monkeypatch.setattr(app, "django_app", Spy())
+    return calls
+
+
+async def get(headers: dict[str, str], path: str = PATH) -> dict:
+    from cyborg_site.asgi import application
+
+    raw = [(k.lower().encode(), v.encode()) for k, v in {"Host": "127.0.0.1", **headers}.items()]
+    return await HttpCommunicator(application, "GET", path, headers=raw).get_response(timeout=10)
+
+
+def token_for(user) -> dict[str, str]:
+    return {"Authorization": f"Token {Token.objects.create(user=user).key}"}
+
+
+def header_names(response: dict) -> set[bytes]:
+    return {name.lower() for name, _ in response["headers"]}
+
+
+async def test_a_trusted_token_is_answered_without_django_with_the_views_answer(viewer, django_calls):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    first = await get(headers)  # not cached yet: Django checks the token and caches it
+    second = await get(headers)
+    assert django_calls == [PATH]
+    assert first["status"] == second["status"] == 200
+    assert json.loads(first["body"]).keys() == json.loads(second["body"]).keys()
+    assert header_names(first) == header_names(second)
+    assert dict(second["headers"])[b"Content-Type"] == b"application/json"
+    assert dict(second["headers"])[b"X-Frame-Options"] == b"DENY"
+
+
+async def test_a_deleted_token_is_refused_at_once_in_the_apis_error_shape(viewer, django_calls):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    assert (await get(headers))["status"] == 200
+    await sync_to_async(Token.objects.filter(user=viewer).delete)()
+    response = await get(headers)
+    assert response["status"] == 401 and json.loads(response["body"])["code"] == "authentication_failed"
+
+
+@pytest.mark.parametrize("extra, path", [
+    ({"Accept": "text/html"}, PATH),  # the browsable API
+    ({}, PATH + "?format=json"),
+    ({"Host": "evil.example"}, PATH),  # Django answers 400 for a host it does not serve
+])
+async def test_anything_but_a_plain_json_read_goes_to_django(viewer, django_calls, extra, path):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    await get(headers)
+    response = await get({**headers, **extra}, path)
+    assert django_calls == [PATH, PATH]
+    assert response["status"] in (200, 400)
+
+
+async def test_an_unknown_token_goes_to_django_and_is_refused(django_calls):
+    response = await get({"Authorization": "Token nope"})
+    assert response["status"] == 401 and django_calls == [PATH]
+    assert not CachedTokenAuthentication._cache
