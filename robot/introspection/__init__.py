@@ -1,0 +1,1 @@
+"""What the robot says about itself: its state machine (SMACH introspection) and its diagnostics."""
