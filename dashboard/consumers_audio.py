@@ -18,7 +18,8 @@ from robot.live.groups import MIC_GROUP, TALK_GROUP
 
 class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
     # Audio both ways must not queue behind database work; audits hop themselves.
-    db_free_types = frozenset({"websocket.receive", "audio.mic", "audio.talk"})
+    db_free_types = frozenset({"websocket.receive", "audio.mic", "audio.format", "audio.problem",
+                               "audio.talk"})
     session: AudioSession | None = None
 
     async def connect(self) -> None:
@@ -63,6 +64,14 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
     async def audio_mic(self, event: dict[str, Any]) -> None:
         if self.session is not None:
             await self.session.on_mic(event["data"])
+
+    async def audio_format(self, event: dict[str, Any]) -> None:
+        if self.session is not None:
+            await self.session.on_mic_format(event["format"])
+
+    async def audio_problem(self, event: dict[str, Any]) -> None:
+        if self.session is not None:
+            await self.session.on_mic_problem(str(event["message"]))
 
     async def audio_talk(self, event: TalkEvent) -> None:
         if self.session is not None:

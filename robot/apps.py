@@ -11,11 +11,16 @@ class RobotConfig(AppConfig):
 
     def ready(self) -> None:
         checks.register(check_robot_settings)
-        # Wherever the link runs: the map renderer, the goal tracker, where the robot is.
-        from robot.link import audio
+        # Wherever the link runs: the map renderer, the goal tracker, where the robot is,
+        # the state machine graph and the diagnostics.
+        from robot.introspection import tracking  # noqa: F401
+        from robot.link import audio, watching
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
+        from robot.overlays import link as overlays
 
         audio.install()  # microphone relay and speaker format wherever the link runs
+        overlays.install()
+        watching.install()  # any topic a page opens: leases, echo, listing and rates
 
         broadcast.connect()
 

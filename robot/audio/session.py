@@ -4,15 +4,16 @@ client → server (text): {"type": "listen", "on": bool}
     | {"type": "talk", "on": true, "format": "S16LE", "rate": 16000, "channels": 1} | {"type": "talk", "on": false}
 client → server (binary): one chunk of talk audio, 20-100 ms of the declared format
 server → client (text): {"type": "hello", "can_listen", "can_talk", "talker", "you"}
-    | {"type": "format", channels, sample_rate, sample_format, bitrate, coding_format} (on listen)
+    | {"type": "format", channels, sample_rate, sample_format, coding_format, robot_coding_format, assumed}
+      (on listen, and again if the robot declares a new format: always S16LE "wave", whatever
+      the robot's microphone sends)
     | {"type": "listening", "on"} | {"type": "talking", "on", "reason"}
     | {"type": "talker", "holder", "you", "reason"} (to everyone) | {"type": "error", "message", "code"}
-server → client (binary): one microphone chunk as the robot sent it (``format`` says how to play it)
+    | {"type": "error", "code": "mic", "message"} (the link could not decode the microphone)
+server → client (binary): one microphone chunk as PCM in the ``format`` frame's terms
 
-Microphone chunks are relayed as the robot sent them, mp3 included: the browser decodes mp3
-with ``decodeAudioData`` (static/js/audio.js). That keeps the server a relay with no audio
-codec to install or run per chunk on a small ground-station machine, keeps the compressed
-size on the network to every listener, and browsers decode mp3 natively.
+Raw PCM from the robot is relayed as it came; mp3 is decoded to PCM once, in the link
+(``robot.audio.mic`` says why the server decodes rather than the browser).
 
 Operators and admins may listen and talk; viewers see who talks and are refused the rest.
 Nothing heard or said is stored: the audit trail keeps who listened or talked, when, how long.
@@ -31,6 +32,7 @@ from typing import Any
 from channels.db import database_sync_to_async
 from django.conf import settings
 
+from robot.audio.mic import Unplayable, playback_format
 from robot.audio.pcm import Pacer, chunk_problem, format_problem
 from robot.audio.talk import TalkEvent, announce_talker, get_talk_lock, talk_view
 from robot.commands.audit import audit_record
@@ -46,10 +48,9 @@ log = logging.getLogger(__name__)
 SendJSON = Callable[[dict[str, Any]], Awaitable[None]]
 SendBytes = Callable[[bytes], Awaitable[None]]
 Membership = Callable[[bool], Awaitable[None]]  # join (True) or leave (False) the microphone group
-# What pages assume when the robot has not said what its microphone sends.
-DEFAULT_FORMAT = {"channels": 1, "sample_rate": 16000, "sample_format": "S16LE", "bitrate": 256000,
-                  "coding_format": "wave"}
 REFRESH_EVERY_S = 0.25
+# The page starts sending once it hears the talk began (a round trip): its first chunk may take longer.
+FIRST_CHUNK_S = 1.0
 
 
 def _iso(t: float) -> str:
@@ -113,7 +114,14 @@ class AudioSession:
         if self.listening_since is not None:
             return
 
+        fmt: dict[str, Any] = {}
+
         async def run() -> str:
+            info = (await get_store().aget_many(["audio_info"])).get("audio_info")
+            try:
+                fmt.update(playback_format(info["msg"] if info else None), assumed=info is None)
+            except Unplayable as exc:
+                raise InvalidCommand(str(exc)) from None
             await arequest("audio_listen", listener=self.me.owner, on=True)
             return "listening"
 
@@ -121,8 +129,7 @@ class AudioSession:
                            params={"address": self.address}, run=run)
         self.listening_since = time.time()
         await self.mic_group(True)
-        info = (await get_store().aget_many(["audio_info"])).get("audio_info")
-        await self.send_json({"type": "format", **(info["msg"] if info else DEFAULT_FORMAT), "assumed": info is None})
+        await self.send_json({"type": "format", **fmt})
         await self.send_json({"type": "listening", "on": True})
         self._tasks.append(asyncio.ensure_future(self._renew()))
 
@@ -157,6 +164,14 @@ class AudioSession:
         if self.listening_since is not None:
             await self.send_bytes(data)
 
+    async def on_mic_format(self, fmt: dict[str, Any]) -> None:
+        if self.listening_since is not None:
+            await self.send_json({"type": "format", **fmt})
+
+    async def on_mic_problem(self, message: str) -> None:
+        if self.listening_since is not None:
+            await self.error(message, "mic")
+
     # --- talking -----------------------------------------------------------------------
 
     async def _talk(self, content: dict[str, Any]) -> None:
@@ -190,7 +205,8 @@ class AudioSession:
     async def _watch_quiet(self) -> None:
         quiet = settings.AUDIO_TALK_QUIET_S
         while self.talk_since is not None:
-            left = self.last_chunk + quiet - time.monotonic()
+            wait = quiet if self.pacer.audio_s else max(quiet, FIRST_CHUNK_S)
+            left = self.last_chunk + wait - time.monotonic()
             if left <= 0:
                 await self._end_talk("quiet")
                 return

@@ -14,7 +14,7 @@ from typing import Any
 from robot import interface as ri
 from robot.audio.talk import end_all_talk
 from robot.commands.modes import perform_mode
-from robot.commands.pipeline import InvalidCommand, arun_command
+from robot.commands.pipeline import Command, InvalidCommand, arun
 from robot.link.bus import RobotError, acall_service, arequest
 from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
@@ -135,36 +135,37 @@ def _username(user: Any) -> str:
     return user.get_username() if getattr(user, "is_authenticated", False) else ""
 
 
-async def estop_run(*, user: Any, source: str) -> EstopReport:
-    """Role check, latch and steps, one audit entry; Forbidden for viewers."""
-    report: EstopReport | None = None
+def estop_command(user: Any) -> Command:
+    """The stop as one command: role check, latch and steps, one audit entry.
 
-    async def run() -> str:
-        nonlocal report
+    ``send`` leaves the report and the latch as it then stands in ``result`` (``report``,
+    ``latch``; no ``latch`` if the store could not be read), so a caller needs no second trip
+    to the event loop to show them."""
+
+    async def send(_: Any) -> str:
         report = await estop_steps(by=_username(user))
+        command.result["report"] = report
+        try:
+            command.result["latch"] = await alatch()
+        except Exception:  # the store is down: the stop is still audited; the caller reads the latch again
+            log.warning("could not read the latch after the e-stop", exc_info=True)
         if not report.ok:
             raise EstopIncomplete(report)
         return report.summary()
 
-    try:
-        await arun_command(user=user, source=source, action="estop", params={}, run=run)
-    except EstopIncomplete as exc:
-        return exc.report
-    assert report is not None
-    return report
+    command = Command("estop", {}, send)
+    return command
 
 
-async def estop_release(*, user: Any, source: str, confirm: Any) -> Latch:
-    """An operator's explicit, confirmed release: motion commands are accepted again
-    (the motors stay off until someone turns them on)."""
-    released: Latch | None = None
+def release_command(user: Any, confirm: Any) -> Command:
+    """An operator's explicit, confirmed release: motion commands are accepted again (the
+    motors stay off until someone turns them on). The released latch is left in ``result["latch"]``."""
 
-    async def run() -> str:
-        nonlocal released
+    async def send(_: Any) -> str:
         if confirm is not True:
             raise InvalidCommand("Confirm the release: send confirm=true.", field="confirm")
         current = await alatch()
-        released = await arelease(by=_username(user))
+        command.result["latch"] = await arelease(by=_username(user))
         try:
             await arequest("estop_release", timeout=STEP_TIMEOUT_S)
         except RobotError as exc:
@@ -175,6 +176,31 @@ async def estop_release(*, user: Any, source: str, confirm: Any) -> Latch:
             return "E-STOP was not engaged"
         return f"E-STOP released ({current.message})"
 
-    await arun_command(user=user, source=source, action="estop.release", params={"confirm": confirm}, run=run)
-    assert released is not None
-    return released
+    command = Command("estop.release", {"confirm": confirm}, send)
+    return command
+
+
+def estop_outcome(command: Command) -> EstopReport:
+    """The report of a stop that ran (a failed step is in the report, not an exception)."""
+    report = command.result["report"]
+    assert isinstance(report, EstopReport)
+    return report
+
+
+async def estop_run(*, user: Any, source: str) -> EstopReport:
+    """The stop from async code (Forbidden for viewers); the report either way."""
+    command = estop_command(user)
+    try:
+        await arun(command, user=user, source=source)
+    except EstopIncomplete:
+        pass
+    return estop_outcome(command)
+
+
+async def estop_release(*, user: Any, source: str, confirm: Any) -> Latch:
+    """The release from async code; the latch as released."""
+    command = release_command(user, confirm)
+    await arun(command, user=user, source=source)
+    latch = command.result["latch"]
+    assert isinstance(latch, Latch)
+    return latch

@@ -90,8 +90,9 @@ async def ensure_released() -> None:
 async def aengage(*, by: str) -> Latch:
     """Latch the stop (a press while latched keeps the first press's who and when)."""
     current = await alatch()
-    if current.latched:
+    if current.latched and current.by:
         return current
+    # (A latch without who is one a link wrote back while the store had lost it: record this press.)
     engaged = Latch(latched=True, by=by, at=time.time())
     await apublish_state(LATCH_KEY, engaged.as_msg())
     return engaged

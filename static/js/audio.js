@@ -1,11 +1,11 @@
-// Two-way audio on the drive page: Listen plays the robot's microphone, holding Talk (or the
-// T key) sends this computer's microphone to the robot's speakers.
+// Two-way audio card (Drive page and dashboard): Listen plays the robot's microphone, holding
+// Talk (or the T key) sends this computer's microphone to the robot's speakers.
 //
-// Listening: the server relays the robot's chunks unchanged as binary websocket frames; a
-// "format" frame (the robot's audio_info) says how to play them. Raw PCM ("wave") is turned
-// into AudioBuffers here; mp3 is decoded here too, with decodeAudioData on whole MPEG frames
-// (see playMp3), so the server stays a relay and only compressed audio crosses the network.
-// Chunks are scheduled back to back on the AudioContext clock behind a small jitter buffer.
+// Listening: the server relays the robot's microphone as binary websocket frames of S16LE PCM,
+// whatever the robot sends (it decodes mp3 itself: robot/audio/mic.py says why), after a
+// "format" frame with the rate and channels. Chunks become AudioBuffers scheduled back to back
+// on the AudioContext clock behind a small jitter buffer. Anything that cannot be played is
+// said in a notice, never dropped silently.
 //
 // Talking: getUserMedia (echo cancellation and noise suppression on) → an AudioWorklet that
 // converts to 16 kHz mono S16LE in 20 ms chunks → the socket. The server holds the talk lock
@@ -25,7 +25,7 @@ export function initAudio(root, config) {
   const listenBtn = $("#audio-listen"), talkBtn = $("#audio-talk"), meter = $("#audio-level");
   const talkState = $("#audio-talker"), problem = $("#audio-problem"), statusEl = $("#audio-status");
   let ws = null, allowed = false, listening = false, talking = false, holding = false;
-  let ctx = null, analyser = null, playAt = 0, format = null, mp3 = new Uint8Array(0);
+  let ctx = null, analyser = null, playAt = 0, format = null;
   let capture = null;
 
   function explain(text) {
@@ -70,7 +70,11 @@ export function initAudio(root, config) {
       if (!allowed) explain("Your role can see who is talking but may not listen or talk (operators and admins can).");
     } else if (f.type === "format") {
       format = f;
-      mp3 = new Uint8Array(0);
+      if (f.coding_format !== "wave" || f.sample_format !== "S16LE") {
+        notify(`The robot's microphone arrives as ${f.coding_format} ${f.sample_format}, which this page cannot play.`,
+          "error", { key: "audio:format" });
+        format = null;
+      }
     } else if (f.type === "listening") {
       listening = f.on;
       if (!f.on) meter.value = 0;
@@ -78,8 +82,8 @@ export function initAudio(root, config) {
       talking = f.on;
       if (!f.on) {
         stopCapture();
-        if (f.reason === "quiet") notify("Talk ended: no audio arrived from this microphone.", "warning");
-        else if (f.reason === "estop") notify("Talk ended by the E-STOP.", "warning");
+        if (f.reason === "quiet") notify("Talk ended: no audio arrived from this microphone.", "warn");
+        else if (f.reason === "estop") notify("Talk ended by the E-STOP.", "warn");
       }
     } else if (f.type === "talker") {
       showTalker(f.holder, f.you);
@@ -121,7 +125,6 @@ export function initAudio(root, config) {
 
   function play(data) {
     if (!ctx || !format) return;
-    if (format.coding_format === "mp3") { playMp3(new Uint8Array(data)); return; }
     const channels = format.channels || 1;
     const pcm = new Int16Array(data, 0, Math.floor(data.byteLength / 2));
     const frames = Math.floor(pcm.length / channels);
@@ -132,17 +135,6 @@ export function initAudio(root, config) {
       for (let i = 0; i < frames; i++) out[i] = pcm[i * channels + c] / 32768;
     }
     schedule(buffer);
-  }
-
-  // mp3 chunks need not end on MPEG frame boundaries and decodeAudioData wants whole frames:
-  // keep the tail of an incomplete frame for the next chunk.
-  function playMp3(bytes) {
-    const joined = new Uint8Array(mp3.length + bytes.length);
-    joined.set(mp3); joined.set(bytes, mp3.length);
-    const end = wholeFrames(joined);
-    mp3 = joined.slice(end);
-    if (!end) return;
-    ctx.decodeAudioData(joined.slice(0, end).buffer).then(schedule, () => {});
   }
 
   function drawLevel() {
@@ -258,26 +250,4 @@ export function initAudio(root, config) {
   if (why) explain(why);
   connect();
   refresh();
-}
-
-// Length of the leading whole MPEG audio frames in bytes (0 if none is complete yet).
-const MP3_BITRATES = [0, 32, 40, 48, 56, 64, 80, 96, 112, 128, 160, 192, 224, 256, 320];
-const MP3_BITRATES_V2 = [0, 8, 16, 24, 32, 40, 48, 56, 64, 80, 96, 112, 128, 144, 160];
-const MP3_RATES = { 3: [44100, 48000, 32000], 2: [22050, 24000, 16000], 0: [11025, 12000, 8000] };
-
-function wholeFrames(b) {
-  let i = 0, end = 0;
-  while (i + 4 <= b.length) {
-    if (b[i] !== 0xff || (b[i + 1] & 0xe0) !== 0xe0) { i++; continue; }
-    const version = (b[i + 1] >> 3) & 3, bitrateIdx = b[i + 2] >> 4, rateIdx = (b[i + 2] >> 2) & 3;
-    const rates = MP3_RATES[version];
-    if (!rates || rateIdx === 3 || bitrateIdx === 0 || bitrateIdx === 15) { i++; continue; }
-    const kbps = (version === 3 ? MP3_BITRATES : MP3_BITRATES_V2)[bitrateIdx];
-    const perFrame = version === 3 ? 144 : 72;
-    const size = Math.floor((perFrame * kbps * 1000) / rates[rateIdx]) + ((b[i + 2] >> 1) & 1);
-    if (i + size > b.length) break;
-    i += size;
-    end = i;
-  }
-  return end;
 }

@@ -27,6 +27,10 @@ async def test_listening_relays_the_robot_microphone_as_binary_frames(link, sim,
     await ears.chunk_count(25)
     assert all(len(c) == 640 for c in ears.chunks)
     assert dominant_hz(b"".join(ears.chunks), 16000) == pytest.approx(440, abs=5)
+    # in order, none missing: the simulator's phase-continuous tone from wherever listening began
+    heard = b"".join(ears.chunks)
+    first = next(k for k in range(sim.robot.mic.published + 1) if tone(440, k * CHUNK, CHUNK, 16000) == ears.chunks[0])
+    assert heard == tone(440, first * CHUNK, len(heard) // 2, 16000)
     await ears.send({"type": "listen", "on": False})
     await ears.text(kind("listening", on=False))
     await async_wait_until(lambda: sim.subscription_count(MIC) == 0, what="microphone unsubscribed")
@@ -67,11 +71,12 @@ async def test_viewers_may_neither_listen_nor_talk(link, sim, viewer):
     await ws.disconnect(timeout=5)
 
 
-async def test_talk_reaches_the_robot_speakers_with_its_format_declared(link, sim, operator, admin_user):
-    mouth, other = await audio_socket(operator), await audio_socket(admin_user)
+async def test_talk_reaches_the_robot_speakers_with_its_format_declared(link, sim, operator, admin_user, viewer):
+    mouth, other, watcher = await audio_socket(operator), await audio_socket(admin_user), await audio_socket(viewer)
     await mouth.send(TALK)
     await mouth.text(kind("talking", on=True))
     assert (await other.text(kind("talker", holder="otto")))["you"] is False
+    assert (await watcher.text(kind("talker", holder="otto")))["you"] is False  # viewers see who talks too
     await talk_tone(mouth, 1000, 0.6)
     await async_wait_until(lambda: len(sim.robot.speaker.chunks) == 30, what="30 chunks at the robot")
     assert sim.robot.speaker.info == ri.speaker_info()
@@ -79,6 +84,8 @@ async def test_talk_reaches_the_robot_speakers_with_its_format_declared(link, si
     await mouth.send({"type": "talk", "on": False})
     await mouth.text(kind("talking", on=False, reason="stop"))
     await other.text(kind("talker", holder=None))
+    await watcher.text(kind("talker", holder=None))
+    await watcher.close()
     entry = await AuditEntry.objects.filter(action="audio.talk").alast()
     assert entry.username == "otto" and entry.params["audio_s"] == pytest.approx(0.6)
     await mouth.close()
@@ -103,7 +110,7 @@ async def test_one_talker_at_a_time(link, sim, operator, admin_user):
 
 
 async def test_a_talker_who_goes_quiet_is_cut(link, sim, operator, settings):
-    settings.AUDIO_TALK_QUIET_S = 0.4
+    settings.AUDIO_TALK_QUIET_S = 0.3
     mouth = await audio_socket(operator)
     await mouth.send(TALK)
     await mouth.text(kind("talking", on=True))
@@ -111,6 +118,18 @@ async def test_a_talker_who_goes_quiet_is_cut(link, sim, operator, settings):
     cut = await mouth.text(kind("talking", on=False), timeout=3)
     assert cut["reason"] == "quiet"
     await mouth.close()
+
+
+async def test_a_talk_whose_audio_never_comes_is_cut(link, sim, operator, admin_user, settings):
+    settings.AUDIO_TALK_QUIET_S = 0.3
+    mouth, other = await audio_socket(operator), await audio_socket(admin_user)
+    await mouth.send(TALK)
+    await mouth.text(kind("talking", on=True))
+    cut = await mouth.text(kind("talking", on=False), timeout=5)
+    assert cut["reason"] == "quiet"
+    await other.text(kind("talker", holder=None, reason="quiet"))
+    await mouth.close()
+    await other.close()
 
 
 async def test_estop_ends_talking_and_refuses_a_new_talk(link, sim, operator):
