@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from asgiref.sync import async_to_sync
 from django.contrib import admin, messages
 from django.db import transaction
-from django.db.models import Max, Min
+from django.db.models import Max, Min, QuerySet
+from django.http import HttpRequest, HttpResponse
 from django.shortcuts import redirect
 from django.urls import path
 from django.utils.html import format_html
@@ -20,20 +24,20 @@ from robot.link.bus import RobotError, acall_service
 class RecordingSettingsAdmin(admin.ModelAdmin):
     list_display = ("__str__", "default_interval_s", "effective_interval_s")
 
-    def has_add_permission(self, request) -> bool:
+    def has_add_permission(self, request: HttpRequest) -> bool:
         return not RecordingSettings.objects.exists()
 
-    def has_delete_permission(self, request, obj=None) -> bool:
+    def has_delete_permission(self, request: HttpRequest, obj: Any = None) -> bool:
         return False
 
 
-def _set_mode(mode: str):
-    def action(modeladmin, request, queryset):
+def _set_mode(mode: str) -> Callable[[Any, HttpRequest, QuerySet[TopicPolicy]], None]:
+    @admin.action(description=f"Record selected topics: {Mode(mode).label}")
+    def action(modeladmin: Any, request: HttpRequest, queryset: QuerySet[TopicPolicy]) -> None:
         count = queryset.update(mode=mode)
         modeladmin.message_user(request, f"{count} topic(s) now recorded: {Mode(mode).label}.")
 
     action.__name__ = f"set_mode_{mode}"
-    action.short_description = f"Record selected topics: {Mode(mode).label}"
     return action
 
 
@@ -56,11 +60,11 @@ class TopicPolicyAdmin(admin.ModelAdmin):
     def topic_and_type(self, policy: TopicPolicy) -> str:
         return format_html('{}<br><small class="policy-type">{}</small>', policy.topic, policy.msg_type)
 
-    def get_urls(self):
+    def get_urls(self) -> list[Any]:
         custom = [path("discover/", self.admin_site.admin_view(self.discover), name="history_topicpolicy_discover")]
         return custom + super().get_urls()
 
-    def discover(self, request):
+    def discover(self, request: HttpRequest) -> HttpResponse:
         """Add (mode off) every topic the robot reports through /rosapi/topics."""
         if request.method != "POST" or not self.has_add_permission(request):
             return redirect("admin:history_topicpolicy_changelist")
@@ -81,16 +85,16 @@ class SampleAdmin(admin.ModelAdmin):
     search_fields = ("topic",)
     show_full_result_count = False  # counting millions of rows on every page view is slow
 
-    def has_add_permission(self, request) -> bool:
+    def has_add_permission(self, request: HttpRequest) -> bool:
         return False
 
-    def has_change_permission(self, request, obj=None) -> bool:
+    def has_change_permission(self, request: HttpRequest, obj: Any = None) -> bool:
         return False
 
-    def delete_model(self, request, obj) -> None:
+    def delete_model(self, request: HttpRequest, obj: Sample) -> None:
         self.delete_queryset(request, Sample.objects.filter(pk=obj.pk))
 
-    def delete_queryset(self, request, queryset) -> None:
+    def delete_queryset(self, request: HttpRequest, queryset: QuerySet[Sample]) -> None:
         """Delete, then rebuild the rollups and forget the cached buckets the deleted samples were in."""
         with transaction.atomic():
             spans = list(queryset.order_by().values("topic").annotate(lo=Min("received_at"), hi=Max("received_at")))

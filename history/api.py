@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import AsyncIterator, Iterable, Iterator
 from typing import Any
 
 from asgiref.sync import async_to_sync, sync_to_async
@@ -12,6 +13,8 @@ from drf_spectacular.utils import extend_schema
 from rest_framework import permissions
 from rest_framework.decorators import api_view, permission_classes
 from rest_framework.negotiation import BaseContentNegotiation
+from rest_framework.parsers import BaseParser
+from rest_framework.renderers import BaseRenderer
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
@@ -30,7 +33,7 @@ from robot.link.bus import acall_service
 class AdminWrites(permissions.BasePermission):
     message = "Only admins may change recording policies."
 
-    def has_permission(self, request, view) -> bool:
+    def has_permission(self, request: Request, view: Any) -> bool:
         return request.method in permissions.SAFE_METHODS or is_admin(request.user)
 
 
@@ -93,11 +96,13 @@ def samples_view(request: Request) -> Response:
 class _IgnoreFormatParameter(BaseContentNegotiation):
     """``format`` here names the export format, not a DRF renderer (which would answer 404)."""
 
-    def select_renderer(self, request, renderers, format_suffix=None):
-        return renderers[0], renderers[0].media_type
+    def select_renderer(self, request: Request, renderers: Iterable[BaseRenderer],
+                        format_suffix: str | None = None) -> tuple[BaseRenderer, str]:
+        first = next(iter(renderers))
+        return first, first.media_type
 
-    def select_parser(self, request, parsers):
-        return parsers[0] if parsers else None
+    def select_parser(self, request: Request, parsers: Iterable[BaseParser]) -> BaseParser | None:
+        return next(iter(parsers), None)
 
 
 class ExportView(APIView):
@@ -119,11 +124,12 @@ class ExportView(APIView):
         return response
 
 
-async def _async_chunks(chunks):
+async def _async_chunks(chunks: Iterator[bytes]) -> AsyncIterator[bytes]:
     # Under ASGI a sync iterator would be read into memory whole; pull it chunk by chunk instead.
     step = sync_to_async(next, thread_sensitive=True)
     done = object()
-    while (chunk := await step(chunks, done)) is not done:
+    # next(iterator, default): the stubs type sync_to_async(next) with next's one-argument form.
+    while (chunk := await step(chunks, done)) is not done:  # type: ignore[call-arg]
         yield chunk
 
 

@@ -12,10 +12,11 @@ leave out, come from the stored JSON; there a bucket that can no longer change i
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import datetime
 
 from django.db import connection
@@ -61,11 +62,11 @@ class Series:
     topic: str
     field: str
     bucket_s: float
-    t: list[float] = field(default_factory=list)  # epoch seconds of each bucket's first sample
-    min: list[float] = field(default_factory=list)
-    max: list[float] = field(default_factory=list)
-    mean: list[float] = field(default_factory=list)
-    count: list[int] = field(default_factory=list)
+    t: list[float] = dataclasses.field(default_factory=list)  # epoch seconds of each bucket's first sample
+    min: list[float] = dataclasses.field(default_factory=list)
+    max: list[float] = dataclasses.field(default_factory=list)
+    mean: list[float] = dataclasses.field(default_factory=list)
+    count: list[int] = dataclasses.field(default_factory=list)
 
 
 Agg = tuple[float | None, float | None, float | None, float | None, int]  # t_first, min, max, sum, n
@@ -171,6 +172,7 @@ def series(*, topic: str, field: str, start: datetime, end: datetime, max_points
         if agg is None or not agg[4]:
             continue
         t, vmin, vmax, vsum, n = agg
+        assert t is not None and vmin is not None and vmax is not None and vsum is not None  # set when n > 0
         out.t.append(t)
         out.min.append(vmin)
         out.max.append(vmax)

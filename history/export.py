@@ -11,7 +11,7 @@ import io
 import json
 from collections.abc import Iterator
 from datetime import datetime
-from typing import Any
+from typing import IO, Any, cast
 
 from history.audio import export_wav
 from history.models import Sample
@@ -140,7 +140,8 @@ def export_mcap(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
     from mcap.writer import CompressionType, Writer
 
     sink = _Sink()
-    writer = Writer(sink, chunk_size=1024 * 1024, compression=CompressionType.ZSTD)
+    # The writer only calls write() and tell(), which is all _Sink has of a file.
+    writer = Writer(cast(IO[Any], sink), chunk_size=1024 * 1024, compression=CompressionType.ZSTD)
     writer.start(profile="", library="cyborg-commander")
     channels: dict[str, int] = {}
     for n, (msg_type, received_at, data) in enumerate(_rows(topic, start, end), 1):

@@ -29,10 +29,31 @@ log = logging.getLogger(__name__)
 
 Writer = Callable[[Sequence[Row]], int]
 
-# The latest-state store key where the recorder leaves, per every-message topic, the receive time of the
-# last message it took and the topic's rate: the next recorder (a standby link taking over, a restart)
-# counts the messages that fell between the two.
+# The latest-state store key where the recorder leaves, per every-message topic, the last message it
+# wrote (receive time and header.seq) and the topic's rate, with the running count of messages lost
+# between recorders: the next recorder (a standby link taking over, a restart) counts the messages that
+# fell between the two, exactly from header.seq when the robot numbers them, else from time x rate.
+# /healthz reports the count (dashboard.health). A Redis restart empties it.
 WATERMARK_KEY = "_recorder"
+# The recorder's hold on the link's upstream subscriptions (others may hold the same topics).
+LINK_HOLDER = "recorder"
+
+
+def header_seq(msg: dict[str, Any]) -> int | None:
+    header = msg.get("header")
+    seq = header.get("seq") if isinstance(header, dict) else None
+    return seq if isinstance(seq, int) and not isinstance(seq, bool) and seq > 0 else None
+
+
+def messages_between(previous: list[Any], t: float, seq: int | None) -> int | None:
+    """Messages published after the previous recorder's last written one ([t, rate, seq]) and
+    before this one's first (at ``t``, numbered ``seq``); None when it cannot be told."""
+    last_t, rate_hz = float(previous[0]), float(previous[1])
+    last_seq = previous[2] if len(previous) > 2 else None
+    if seq is not None and isinstance(last_seq, int):
+        # A lower number: the publisher restarted (the robot rebooted) and its count with it.
+        return seq - last_seq - 1 if seq > last_seq else None
+    return max(0, round((t - last_t) * rate_hz) - 1)
 
 
 class Recorder:
@@ -62,10 +83,13 @@ class Recorder:
         self._write_log = FailureLog("writing recorded messages")
         self._retry: list[Row] = []
         self.received = self.stored = self.dropped = self.oversize = 0
-        # Every-message topics: [first t, last t, messages] taken here; the previous recorder's [last t, rate].
+        # Every-message topics: [first t, last t, messages] taken here; (t, seq) of the last one written;
+        # the previous recorder's [last t, rate, last seq].
         self._seen: dict[str, list[float]] = {}
-        self._previous: dict[str, list[float]] = {}
-        self.gap_lost: dict[str, int] = {}  # estimated messages lost between the previous recorder and this one
+        self._written: dict[str, tuple[float, int | None]] = {}
+        self._previous: dict[str, list[Any]] = {}
+        self.gap_lost: dict[str, int] = {}  # messages lost between the previous recorder and this one
+        self.lost_total: dict[str, int] = {}  # the same, summed over every recorder since Redis started
 
     # --- on the event-loop thread: never blocks --------------------------------------
 
@@ -75,7 +99,7 @@ class Recorder:
             seen = self._seen.get(name)
             if seen is None:
                 self._seen[name] = [t, t, 1]
-                self._count_gap(name, t)
+                self._count_gap(name, t, header_seq(msg))
             else:
                 seen[1], seen[2] = t, seen[2] + 1
             if len(self._buffer) >= self.buffer_rows:
@@ -91,25 +115,35 @@ class Recorder:
                 self._backlog_t[name] = t
                 self.backlog.append(entry)
 
-    def _count_gap(self, name: str, t: float) -> None:
+    def _count_gap(self, name: str, t: float, seq: int | None) -> None:
         previous = self._previous.pop(name, None)
         if previous is None:
             return
-        last_t, rate_hz = previous
-        lost = max(0, round((t - last_t) * rate_hz) - 1)
+        lost = messages_between(previous, t, seq)
+        if lost is None:
+            log.warning("history: %s restarted its numbering since the previous recorder's last message; "
+                        "the messages between them are not counted", name)
+            return
+        self.gap_lost[name] = self.gap_lost.get(name, 0) + lost
+        self.lost_total[name] = self.lost_total.get(name, 0) + lost
         if lost:
-            self.gap_lost[name] = self.gap_lost.get(name, 0) + lost
-            log.warning("history: about %d messages of %s were not recorded in the %.2f s between the previous "
-                        "recorder's last one and this one's first (a link failover or restart)", lost, name, t - last_t)
+            log.warning("history: %d messages of %s were not recorded in the %.2f s between the previous "
+                        "recorder's last one and this one's first (a link failover or restart); %d so far",
+                        lost, name, t - float(previous[0]), self.lost_total[name])
 
     async def resume_after(self, store: Any) -> None:
         """Pick up where the previous recorder (another link, an earlier run) left off, to count the gap."""
         previous = (await store.aget_many([WATERMARK_KEY])).get(WATERMARK_KEY) or {}
         self._previous = dict(previous.get("topics", {}))
+        self.lost_total = {name: int(n) for name, n in previous.get("lost", {}).items()}
 
     def watermark(self) -> dict[str, Any]:
-        return {"topics": {name: [last, (n - 1) / (last - first) if last > first else 0.0]
-                           for name, (first, last, n) in self._seen.items()}}
+        topics: dict[str, list[Any]] = {}
+        for name, (last_t, seq) in self._written.items():
+            first, last, n = self._seen.get(name, (last_t, last_t, 1))
+            topics[name] = [last_t, (n - 1) / (last - first) if last > first else 0.0, seq]
+        # A topic this recorder has not written yet keeps the previous recorder's mark.
+        return {"topics": {**self._previous, **topics}, "lost": dict(self.lost_total)}
 
     def _drop(self, name: str) -> None:
         self.dropped += 1
@@ -144,6 +178,8 @@ class Recorder:
                 self._retry = rows[start:start + self.buffer_rows]
                 self.dropped += len(rows) - start - len(self._retry)
                 raise
+        marks = {name: (t, header_seq(msg)) for name, _, msg, t in pending}  # the last of each topic wins
+        self._written = {**self._written, **marks}  # rebound, never mutated: the loop thread reads it
         return len(rows)
 
     async def flush(self) -> int:
@@ -196,11 +232,10 @@ class Recorder:
         self.apply(policies)
         wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
         for name, msg_type in wanted.items():
-            if name not in link.subscribed:
-                link.subscribe(name, msg_type)
-                self._subscribed_by_us.add(name)
+            link.subscribe(name, msg_type, holder=LINK_HOLDER)
+            self._subscribed_by_us.add(name)
         for name in self._subscribed_by_us - set(wanted):
-            link.unsubscribe(name)
+            link.unsubscribe(name, holder=LINK_HOLDER)
             self._subscribed_by_us.discard(name)
 
     async def publish_latest(self, store: Any) -> None:
@@ -210,8 +245,13 @@ class Recorder:
             await store.aput(entry["key"], entry)
         for entry in backlog:
             await store.aappend_recent(entry["key"], entry, settings.HISTORY_BACKLOG_SAMPLES)
-        if self._seen:
+        if self._written or self.lost_total:
             await store.aput(WATERMARK_KEY, self.watermark())
+
+
+def losses(watermark: dict[str, Any] | None) -> dict[str, int]:
+    """Per every-message topic, the messages lost between recorders so far (for /healthz)."""
+    return {name: int(n) for name, n in ((watermark or {}).get("lost") or {}).items()}
 
 
 # The recorder running in this process, if any (tests and the status view read its counters).
@@ -221,7 +261,7 @@ current: Recorder | None = None
 async def run_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
     global current
-    writer = write_rows
+    writer: Callable[[Sequence[Row]], int] = write_rows
     if settings.HISTORY_BATCH_WRITER == "celery":
         from history.tasks import celery_writer_for
 

@@ -18,6 +18,8 @@ def prune_expired(*, now: float | None = None) -> int:
     now = now or time.time()
     deleted = 0
     for topic, retention_s in TopicPolicy.objects.filter(retention_s__isnull=False).values_list("topic", "retention_s"):
+        if retention_s is None:  # excluded by the filter; the column is nullable
+            continue
         cutoff = now - retention_s
         with transaction.atomic():
             count, _ = Sample.objects.filter(topic=topic, received_at__lt=utc(cutoff)).delete()

@@ -82,10 +82,10 @@ def aggregate(messages: Iterable[tuple[str, float, Any]], levels: Iterable[int] 
     out: Aggregates = {}
     for level in levels:
         for (topic, path, second), agg in seconds.items():
-            key = (topic, level, path, second // level)
-            into = out.get(key)
+            out_key = (topic, level, path, second // level)
+            into = out.get(out_key)
             if into is None:
-                out[key] = list(agg)
+                out[out_key] = list(agg)
             else:
                 _merge(into, agg)
     return out

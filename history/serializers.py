@@ -147,7 +147,9 @@ class RecordedTopicOut(serializers.Serializer):
     msg_type = serializers.CharField()
     mode = serializers.ChoiceField(choices=Mode.choices)
     last = serializers.DateTimeField(allow_null=True, help_text="When the newest sample arrived")
-    fields = serializers.ListField(child=serializers.CharField(), help_text="Plottable numeric fields")
+    # The metaclass takes declared fields off the class, so these names do not hide Serializer.fields/.data.
+    fields = serializers.ListField(  # type: ignore[assignment]
+        child=serializers.CharField(), help_text="Plottable numeric fields")
     text = serializers.BooleanField(help_text="Has text fields: read as a table of messages")
 
 
@@ -180,7 +182,7 @@ class MessagesIn(RangeIn):
 
 class MessageOut(serializers.Serializer):
     t = serializers.FloatField(help_text="epoch seconds (UTC) when it was received")
-    data = serializers.DictField(help_text="The message as recorded")
+    data = serializers.DictField(help_text="The message as recorded")  # type: ignore[assignment]
 
 
 class MessagesOut(serializers.Serializer):

@@ -60,6 +60,9 @@ class FailureLog:
             self.failing = True
 
 
+IN_FLIGHT_WAIT_S = 10.0
+
+
 async def in_thread(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
     """Run blocking database work off the event loop, in a worker thread that tidies its connection."""
 
@@ -70,7 +73,17 @@ async def in_thread(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         finally:
             close_old_connections()
 
-    return await asyncio.to_thread(call)
+    work = asyncio.ensure_future(asyncio.to_thread(call))
+    try:
+        return await asyncio.shield(work)
+    except asyncio.CancelledError:
+        # A thread cannot be stopped: a service that is cancelled ends once its write has, so what
+        # follows (shutdown, a test's database teardown) never meets the database mid-write.
+        done, _ = await asyncio.wait({work}, timeout=IN_FLIGHT_WAIT_S)
+        for finished in done:
+            if not finished.cancelled():
+                finished.exception()  # nobody waits for its outcome any more: don't report it as lost
+        raise
 
 
 def utc(t: float) -> datetime:
@@ -133,7 +146,7 @@ def _forget_late_buckets(rows: Sequence[Row]) -> None:
 
 def forget_buckets(*, topic: str, start_ms: float | None = None, end_ms: float | None = None) -> int:
     """Drop cached buckets of ``topic`` that overlap [start_ms, end_ms]."""
-    big = BigIntegerField()
+    big: BigIntegerField[int, int] = BigIntegerField()
     buckets = SeriesBucket.objects.filter(topic=topic).alias(
         b_start=ExpressionWrapper(F("index") * F("width_ms"), output_field=big),
         b_end=ExpressionWrapper((F("index") + 1) * F("width_ms"), output_field=big),
@@ -176,7 +189,7 @@ def write_rollups(aggregates: Aggregates) -> None:
         if connection.vendor == "postgresql":
             cursor.execute(_rollup_upsert("postgresql"), [list(column) for column in zip(*rows, strict=True)])
         else:
-            cursor.executemany(_rollup_upsert("sqlite"), rows)
+            cursor.executemany(_rollup_upsert("sqlite"), rows)  # type: ignore[arg-type]  # floats and strs
 
 
 def rebuild_rollups(*, topic: str, start: float | None, end: float) -> None:

@@ -1,3 +1,4 @@
+from django.http import HttpRequest, HttpResponse
 from django.urls import reverse
 
 from cyborg_site.roles import is_admin
@@ -6,7 +7,7 @@ from history.selectors import recorded_topics
 from robot import interface as ri
 
 
-def index(request):
+def index(request: HttpRequest) -> HttpResponse:
     """The plots page: pick a topic, a numeric field and a time range; presets for the usual views."""
     emotion = ri.topic("emotional_state").name
     config = {

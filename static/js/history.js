@@ -98,6 +98,33 @@ function draw(fields, data, unit) {
     cursor: { drag: { x: true, y: false, setScale: false } },
     hooks: { setSelect: [onSelect] },
   }, data, el);
+  selectByTouch(chart);
+}
+
+// uPlot selects with a mouse only: a finger dragging sideways across the plot selects the same
+// way (the plot lets the browser pan vertically only, so a vertical swipe still scrolls the page).
+function selectByTouch(u) {
+  const over = u.over;
+  let from = null;
+  const at = (e) => Math.min(Math.max(e.clientX - over.getBoundingClientRect().left, 0), over.clientWidth);
+  const select = (to, fire) => u.setSelect(
+    { left: Math.min(from, to), width: Math.abs(to - from), top: 0, height: over.clientHeight }, fire);
+  over.addEventListener("pointerdown", (e) => {
+    if (e.pointerType === "mouse") return;
+    from = at(e);
+    over.setPointerCapture(e.pointerId);
+  });
+  over.addEventListener("pointermove", (e) => { if (from !== null && e.pointerType !== "mouse") select(at(e), false); });
+  over.addEventListener("pointerup", (e) => {
+    if (from === null || e.pointerType === "mouse") return;
+    select(at(e), true);
+    from = null;
+  });
+  over.addEventListener("pointercancel", () => {
+    if (from === null) return;
+    from = null;
+    u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
+  });
 }
 
 function onSelect(u) {

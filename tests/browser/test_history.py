@@ -1,12 +1,13 @@
-"""The History page in a real browser: the state timeline counts only what was recorded,
-zooming fetches finer buckets, From/To only for a custom range, text topics as a table."""
+"""The History page in a real browser, at a desktop and a phone width: the state timeline counts only what was recorded,
+zooming (by mouse or finger) fetches finer buckets, From/To only for a custom range, text topics as a table."""
 
 from __future__ import annotations
 
 import pytest
 from playwright.sync_api import expect
 
-from tests.browser.support import DESKTOP, login
+from tests.browser.checks import HORIZONTAL_OVERFLOW
+from tests.browser.support import PHONE, login
 
 pytestmark = pytest.mark.browser
 
@@ -83,34 +84,51 @@ def test_history_shows_what_was_recorded_without_stale_views(sized_page, seeded)
     assert errors == []
 
 
-def test_zooming_fetches_finer_buckets(browser, seeded):
-    context = browser.new_context(viewport=DESKTOP)
-    page = context.new_page()
-    page.set_default_timeout(15_000)
-    try:
-        login(page, seeded, "vera", next_path="/history/")
-        page.select_option("#topic", "/test/level")
-        page.click("#plot-form button[type=submit]")
-        expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
-        requests: list[str] = []
-        page.on("request", lambda r: "/api/history/samples/" in r.url and requests.append(r.url))
-        over = page.locator("#chart .u-over")
-        box = over.bounding_box()
-        assert box is not None
-        # The ten recorded minutes are the plot's last pixels of a day; pick the plot's right
-        # edge, where the data is, after first zooming to the last hour's worth of the x axis.
-        page.mouse.move(box["x"] + box["width"] * 0.5, box["y"] + box["height"] / 2)
+def drag_across(page, box, start: float, end: float) -> None:
+    """Drag across the plot from ``start`` to ``end`` (fractions of its width): with the mouse on a
+    desktop, with a finger on a phone (Chromium's touch input, as a phone's browser gets it)."""
+    y = box["y"] + box["height"] / 2
+    xs = [box["x"] + box["width"] * (start + (end - start) * k / 6) for k in range(7)]
+    if page.viewport is not PHONE:
+        page.mouse.move(xs[0], y)
         page.mouse.down()
-        page.mouse.move(box["x"] + box["width"] - 1, box["y"] + box["height"] / 2, steps=5)
+        for x in xs[1:]:
+            page.mouse.move(x, y)
         page.mouse.up()
-        expect(page.locator("#plot-info")).to_contain_text("(zoomed)")
-        assert len(requests) == 1, requests
-        text = page.locator("#plot-info").inner_text()
-        width_s = float(text.split("buckets of ")[1].split(" s")[0])
-        assert width_s < 60, text
-        expect(page.locator("#zoom-out")).to_be_visible()
-        page.click("#zoom-out")
-        expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
-        expect(page.locator("#zoom-out")).to_be_hidden()
-    finally:
-        context.close()
+        return
+    cdp = page.context.new_cdp_session(page)
+    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": xs[0], "y": y}]})
+    for x in xs[1:]:
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x, "y": y}]})
+    cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+    cdp.detach()
+
+
+def test_zooming_fetches_finer_buckets(sized_page, seeded):
+    page = sized_page
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    login(page, seeded, "vera", next_path="/history/")
+    page.select_option("#topic", "/test/level")
+    page.click("#plot-form button[type=submit]")
+    expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
+    assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0, "the plot makes the page scroll sideways"
+    requests: list[str] = []
+    page.on("request", lambda r: "/api/history/samples/" in r.url and requests.append(r.url))
+    over = page.locator("#chart .u-over")
+    over.scroll_into_view_if_needed()
+    box = over.bounding_box()
+    assert box is not None
+    # The ten recorded minutes are the plot's last pixels of a day: drag from the middle of the
+    # x axis to its right edge, where the data is.
+    drag_across(page, box, 0.5, 0.999)
+    expect(page.locator("#plot-info")).to_contain_text("(zoomed)")
+    assert len(requests) == 1, requests
+    text = page.locator("#plot-info").inner_text()
+    width_s = float(text.split("buckets of ")[1].split(" s")[0])
+    assert width_s < 60, text
+    expect(page.locator("#zoom-out")).to_be_visible()
+    page.click("#zoom-out")
+    expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
+    expect(page.locator("#zoom-out")).to_be_hidden()
+    assert errors == []

@@ -187,3 +187,27 @@ async def test_it_records_the_microphone_only_under_a_policy_and_exports_it_as_w
     assert (recording.dropped, recording.oversize) == (0, 0)
     assert 50 <= len(rows) <= sim.robot.mic.published
     assert _dominant_hz(frames, 16000, 1) == pytest.approx(440, abs=5)
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_listening_and_talking_store_no_audio_without_a_recording_policy(recording, sim, link, operator):
+    from tests.audio.support import TALK, audio_socket, kind, talk_tone
+
+    mic, speaker = ri.topic("audio").name, ri.topic("speaker").name
+    await sync_to_async(ensure_default_policies)()
+    await async_wait_until(lambda: sim.subscription_count(ri.topic("battery_soc").name) > 0, timeout=10,
+                           what="the recorder following the default policies")
+    ears = await audio_socket(operator)
+    await ears.send({"type": "listen", "on": True})
+    await ears.chunk_count(25)  # half a second heard
+    await ears.send(TALK)
+    await ears.text(kind("talking", on=True))
+    await talk_tone(ears, 500, 0.5)
+    await async_wait_until(lambda: len(sim.robot.speaker.chunks) >= 25, what="the talk at the robot")
+    await ears.send({"type": "talk", "on": False})
+    await ears.text(kind("talking", on=False))
+    await ears.close()
+    await recording.flush()
+    assert recording.offer in link.listeners and recording.every  # it saw every message, recording others
+    stored = await sync_to_async(lambda: Sample.objects.filter(topic__in=[mic, speaker]).count())()
+    assert stored == 0

@@ -80,14 +80,44 @@ def test_a_recorder_taking_over_counts_the_messages_missed_since_the_previous_on
     start = time.time() - 30
     first = Recorder()
     first.apply(load_policies())
-    for i in range(40):  # 2 s at 20 Hz, then the process dies
+    for i in range(40):  # 2 s at 20 Hz, written
         first.offer(PERIODIC, TYPE, {"data": i}, start + i / 20)
+    first.flush_sync(first.take())
     async_to_sync(first.publish_latest)(store)
     assert store.get_all()[WATERMARK_KEY]["topics"][PERIODIC][1] == pytest.approx(20)
+    for i in range(40, 45):  # taken but never written: the process dies before its next flush
+        first.offer(PERIODIC, TYPE, {"data": i}, start + i / 20)
 
     second = Recorder()
     second.apply(load_policies())
     async_to_sync(second.resume_after)(store)
-    second.offer(PERIODIC, TYPE, {"data": 50}, start + 50 / 20)  # messages 40..49 never arrived
+    second.offer(PERIODIC, TYPE, {"data": 50}, start + 50 / 20)  # 40..49 never reached the database
 
     assert second.gap_lost == {PERIODIC: 10}
+
+
+def test_numbered_messages_are_counted_exactly_and_the_count_adds_up_across_recorders(db):
+    from history.recorder import WATERMARK_KEY, losses
+
+    policy_upsert(topic=PERIODIC, msg_type="nav_msgs/Odometry", mode=Mode.EVERY)
+    store = get_store()
+    store.put(WATERMARK_KEY, {})
+    start = time.time() - 30
+
+    def recorder(seqs: list[int], at: float) -> Recorder:
+        rec = Recorder(writer=lambda rows: len(rows))
+        rec.apply(load_policies())
+        async_to_sync(rec.resume_after)(store)
+        for n, seq in enumerate(seqs):  # irregular timing: the numbers, not the clock, tell the gap
+            rec.offer(PERIODIC, "nav_msgs/Odometry", {"header": {"seq": seq}}, at + n * 0.3)
+        rec.flush_sync(rec.take())
+        async_to_sync(rec.publish_latest)(store)
+        return rec
+
+    recorder([1, 2, 3], start)
+    assert recorder([10, 11], start + 1).gap_lost == {PERIODIC: 6}
+    assert recorder([12, 13], start + 9).gap_lost == {PERIODIC: 0}
+    assert losses(store.get_all()[WATERMARK_KEY]) == {PERIODIC: 6}
+    # The robot restarted and numbers from 1 again: unknown, not counted (and not negative).
+    assert recorder([1, 2], start + 20).gap_lost == {}
+    assert losses(store.get_all()[WATERMARK_KEY]) == {PERIODIC: 6}
