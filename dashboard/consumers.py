@@ -7,15 +7,18 @@ from typing import Any
 from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
+from cyborg_site.direct_frames import EXTENSION as FRAMES_EXTENSION
 from cyborg_site.roles import is_operator
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from robot import interface as ri
 from robot.link.bus import RobotError, arequest
+from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
 from robot.live.feed import keeps_every_message, local_hub
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
-from robot.live.keys import SERVER_KEYS, watchable_keys
+from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
 from robot.live.state import get_store
+from robot.live.topicwatch import TopicRefused, local_watches
 
 UNAUTHENTICATED = 4401
 
@@ -36,7 +39,9 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
         await self.send(text_data=status_text(status))
         self.hub = local_hub()
-        self.socket = self.hub.attach(self._send_text)
+        # Under Daphne: frames written straight to the connection (cyborg_site.direct_frames).
+        writer = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
+        self.socket = self.hub.attach(self._send_text, writer)
 
     async def _send_text(self, text: str) -> None:
         await self.base_send({"type": "websocket.send", "text": text})
@@ -44,13 +49,20 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
     async def disconnect(self, code: int) -> None:
         if hasattr(self, "socket"):
             self.hub.detach(self.socket)
+            await local_watches().drop(self.socket)
 
     async def receive_json(self, content: Any, **kwargs: Any) -> None:
         action = content.get("action") if isinstance(content, dict) else None
         if action == "watch":
             await self._watch(content.get("keys"))
+        elif action == "unwatch":
+            await self._unwatch(content.get("keys"))
         elif action == "reconnect":
             await self._reconnect()
+        elif action == "watch_topic":
+            await self._watch_topic(content.get("topic"))
+        elif action == "unwatch_topic":
+            await self._unwatch_topic(content.get("topic"))
         else:
             await self.send_json({"kind": "error", "message": f"Unknown action {action!r}"})
 
@@ -63,16 +75,50 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if unknown:
             await self.send_json({"kind": "error", "message": f"Cannot watch: {', '.join(unknown)}"})
         new = [k for k in dict.fromkeys(keys) if k in allowed and k not in self.socket.keys]
-        for key in new:
-            if key in SERVER_KEYS:  # written by the server itself: no ROS topic to subscribe
-                continue
-            topic = ri.topic(key)
+        needed = dict.fromkeys(t for key in new for t in upstream_topics(key))
+        for topic_key in needed:  # server-written keys need none; overlays need their robot topics
+            topic = ri.topic(topic_key)
             if not topic.monitor:  # subscribed on first demand, once for every watcher
                 try:
                     await arequest("subscribe", topic=topic.name, msg_type=topic.type, timeout=2)
                 except RobotError as exc:
                     await self.send_json({"kind": "error", "message": exc.message})
+                    break  # one notice: the rest would fail the same way
         await self._snapshot(new)
+
+    async def _unwatch(self, keys: Any) -> None:
+        if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
+            await self.send_json({"kind": "error", "message": "unwatch needs a list of topic keys"})
+            return
+        self.hub.unwatch(self.socket, keys)
+        for key in keys:
+            if is_echo_key(key):
+                await local_watches().unwatch(self.socket, key.removeprefix(ECHO_PREFIX))
+
+    async def _watch_topic(self, name: Any) -> None:
+        """Any topic of the robot's, by name (the topics page): summarised, at most a few times a second."""
+        key = echo_key(name) if isinstance(name, str) else ""
+        first = bool(key) and key not in self.socket.keys
+        if first:  # listening before the link answers: it sends a latched topic's one message at once
+            self.hub.watch(self.socket, [key])
+        try:
+            await local_watches().watch(self.socket, name)
+        except TopicRefused as exc:
+            await self.send_json({"kind": "error", "code": exc.code, "topic": str(name)[:300], "message": exc.message})
+            if exc.code != "offline":
+                if first:
+                    self.hub.unwatch(self.socket, [key])
+                return
+        if first and key not in self.socket.pending:  # else a live value is already on its way
+            await self._snapshot([key])
+        await self.send_json({"kind": "watching", "topic": name, "key": key})
+
+    async def _unwatch_topic(self, name: Any) -> None:
+        if not isinstance(name, str):
+            await self.send_json({"kind": "error", "message": "unwatch_topic needs a topic name"})
+            return
+        self.hub.unwatch(self.socket, [echo_key(name)])
+        await local_watches().unwatch(self.socket, name)
 
     async def _snapshot(self, keys: list[str]) -> None:
         """Watch ``keys`` and queue their stored values, never older than a live update already queued."""
@@ -81,11 +127,12 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         self.hub.watch(socket, keys)
         try:
             store = get_store()
-            recent = {k for k in keys if k not in SERVER_KEYS and ri.topic(k).recent}
+            recent = {k for k in keys if k not in SERVER_KEYS and not is_echo_key(k) and ri.topic(k).recent}
             latest = await store.aget_many([k for k in keys if k not in recent])
             for key in keys:
                 every = keeps_every_message(key)
-                entries = await store.aget_recent(key) if key in recent else [latest.get(key)]
+                entries: list[dict[str, Any] | None] = [*await store.aget_recent(key)] if key in recent \
+                    else [latest.get(key)]
                 live = socket.tracking.get(key)
                 for entry in entries:
                     if not entry:

@@ -1,4 +1,7 @@
+from typing import Any
+
 from django.conf import settings
+from django.http import HttpRequest
 from django.urls import reverse
 
 from cyborg_site.roles import is_admin, is_operator, role_of
@@ -9,7 +12,7 @@ from robot.teleop.latch import latch
 COMMAND_NAMES = ("mode", "event", "speech", "emotion", "emotion-system", "motors", "playback", "dome")
 
 
-def roles(request):
+def roles(request: HttpRequest) -> dict[str, Any]:
     user = getattr(request, "user", None)
     return {
         "role": role_of(user),
@@ -19,14 +22,14 @@ def roles(request):
     }
 
 
-def estop(request):
+def estop(request: HttpRequest) -> dict[str, Any]:
     """The E-STOP latch, so a page opened while it holds shows the banner from the start."""
     if not getattr(getattr(request, "user", None), "is_authenticated", False):
         return {}
     return {"estop": latch()}
 
 
-def site_config(request):
+def site_config(request: HttpRequest) -> dict[str, Any]:
     """What every page's scripts read from base.html's "site-config": URLs and the time policy."""
     return {
         "site_config": {

@@ -13,8 +13,9 @@ from typing import Any
 from django.conf import settings
 from django.db import connection
 
+from history.recorder import WATERMARK_KEY, losses
 from robot.api.errors import UNAVAILABLE_TEXT, unavailable
-from robot.live.state import link_status
+from robot.live.state import get_store, link_status
 from robot.supervisor import failing
 
 PING_TIMEOUT_S = 1.0
@@ -84,6 +85,18 @@ def health_report() -> dict[str, Any]:
     status = link_status() if "redis" not in down else {"connected": False, "url": settings.ROSBRIDGE_URL}
     report.update(connected=bool(status["connected"]), link_running=bool(status.get("link_running", False)),
                   command_path=bool(status.get("command_path", False)), robot_url=status.get("url") or "",
+                  video_url=settings.VIDEO_URL,
                   failing_tasks=[*status.get("failing_tasks", []), *failing()], link_holder=status.get("holder"),
-                  failed_subscriptions=status.get("failed_subscriptions") or {})
+                  failed_subscriptions=status.get("failed_subscriptions") or {},
+                  history_lost_in_handovers=_handover_losses() if "redis" not in down else {})
     return report
+
+
+def _handover_losses() -> dict[str, int]:
+    """Every-message recording lost between one recorder and the next (link failovers, restarts)."""
+    try:
+        return losses(get_store().get_all().get(WATERMARK_KEY))
+    except Exception as exc:
+        if not unavailable(exc):
+            raise
+        return {}

@@ -16,6 +16,7 @@ from robot.commands.audit import audit_record
 
 def lockout_response(request: HttpRequest, original_response: Any = None, credentials: Any = None) -> HttpResponse:
     """429 in the API's error shape, or the login page with a notice."""
+    response: HttpResponse
     if is_api_path(request.path):
         response = api_error(429, lockout_message(), "locked_out")
     else:

@@ -1,10 +1,15 @@
+"""The pages (namespaced ``dashboard:``) and the page-preferences API (``api_urlpatterns``, under /api/)."""
+
 from django.urls import path
 
 from dashboard.views.activity import activity
 from dashboard.views.drive import drive
 from dashboard.views.health import healthz
 from dashboard.views.home import home
-from dashboard.views.map import map_image, map_page
+from dashboard.views.introspection import diagnostics, statemachine
+from dashboard.views.map import costmap_tile, map_image, map_page
+from dashboard.views.preferences import map_overlays_view
+from dashboard.views.topics import topics_page
 from dashboard.views.video import video_snapshot, video_stream
 
 app_name = "dashboard"
@@ -15,7 +20,15 @@ urlpatterns = [
     path("activity/", activity, name="activity"),
     path("map/", map_page, name="map"),
     path("map/image/<str:version>.png", map_image, name="map-image"),
+    path("map/costmap/<str:layer>/<str:version>/<str:name>.png", costmap_tile, name="costmap-tile"),
     path("drive/", drive, name="drive"),
+    path("topics/", topics_page, name="topics"),
+    path("statemachine/", statemachine, name="statemachine"),
+    path("diagnostics/", diagnostics, name="diagnostics"),
     path("video/stream", video_stream, name="video-stream"),
     path("video/snapshot", video_snapshot, name="video-snapshot"),
+]
+
+api_urlpatterns = [
+    path("me/map-overlays/", map_overlays_view, name="api-map-overlays"),
 ]

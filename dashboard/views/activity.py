@@ -5,6 +5,7 @@ from __future__ import annotations
 from urllib.parse import urlencode
 
 from django.core.paginator import Paginator
+from django.http import HttpRequest, HttpResponse
 
 from dashboard.rendering import render_safe
 from robot.commands.selectors import AUDIT_FILTERS, audit_entries
@@ -13,7 +14,7 @@ from robot.models import AuditEntry
 PAGE_SIZE = 50
 
 
-def activity(request):
+def activity(request: HttpRequest) -> HttpResponse:
     filters = {name: request.GET.get(name, "").strip() for name in AUDIT_FILTERS}
     page = Paginator(audit_entries(filters), PAGE_SIZE).get_page(request.GET.get("page"))
     query = urlencode({k: v for k, v in filters.items() if v})

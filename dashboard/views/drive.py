@@ -5,10 +5,10 @@ from __future__ import annotations
 from django.conf import settings
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import render
-from django.templatetags.static import static
 from django.urls import reverse
 
-from dashboard.routing import AUDIO_SOCKET_PATH, TELEOP_SOCKET_PATH
+from dashboard.routing import TELEOP_SOCKET_PATH
+from dashboard.selectors import audio_config
 from robot.live.keys import DRIVE_KEYS
 
 # Without a new camera frame for this long the picture is shown as unavailable.
@@ -24,8 +24,7 @@ def drive_config() -> dict[str, object]:
         "stream_url": reverse("dashboard:video-stream"),
         "snapshot_url": reverse("dashboard:video-snapshot"),
         "teleop_socket": TELEOP_SOCKET_PATH,
-        "audio_socket": AUDIO_SOCKET_PATH,
-        "audio_worklet": static("js/audio-capture.js"),
+        **audio_config(),
         "camera_stale_s": CAMERA_STALE_S,
         "keys": list(DRIVE_KEYS),
     }

@@ -9,7 +9,7 @@ from __future__ import annotations
 import logging
 import sys
 
-from django.http import HttpResponse
+from django.http import HttpRequest, HttpResponse
 from django.template.loader import render_to_string
 
 from robot.api.errors import (
@@ -32,29 +32,30 @@ def error_page(status: int, title: str, message: str, *, retry: bool = False) ->
     return response
 
 
-def bad_request(request, exception=None):
+def bad_request(request: HttpRequest, exception: Exception | None = None) -> HttpResponse:
     detail, code = bad_request_detail(exception)
     if is_api_path(request.path):
         return api_error(400, detail, code)
     return error_page(400, "Bad request", detail)
 
 
-def permission_denied(request, exception=None):
+def permission_denied(request: HttpRequest, exception: Exception | None = None) -> HttpResponse:
     detail = "You do not have permission to do this."
     if is_api_path(request.path):
         return api_error(403, detail, "permission_denied")
     return error_page(403, "Not allowed", detail)
 
 
-def not_found(request, exception=None):
+def not_found(request: HttpRequest, exception: Exception | None = None) -> HttpResponse:
     if is_api_path(request.path):
         return api_error(404, f"No API endpoint at {request.path}; see /api/docs/.", "not_found")
     return error_page(404, "Page not found", f"There is no page at {request.path}.")
 
 
-def server_error(request):
+def server_error(request: HttpRequest) -> HttpResponse:
     # Django calls this from inside its except block: the exception is still at hand.
-    service = unavailable(sys.exc_info()[1]) if sys.exc_info()[1] else None
+    exc = sys.exc_info()[1]
+    service = unavailable(exc) if exc else None
     if service:
         if is_api_path(request.path):
             response = api_error(503, unavailable_detail(service), "unavailable")

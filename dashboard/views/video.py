@@ -13,7 +13,7 @@ import weakref
 from collections.abc import AsyncIterator
 
 from django.conf import settings
-from django.http import HttpRequest, HttpResponse, StreamingHttpResponse
+from django.http import HttpRequest, HttpResponse, HttpResponseBase, StreamingHttpResponse
 
 from dashboard.videorelay import CONTENT_TYPE, UpstreamError, VideoRelay, Viewer, fetch_snapshot, get_relay
 
@@ -53,7 +53,7 @@ async def _frames(relay: VideoRelay, viewer: Viewer) -> AsyncIterator[bytes]:
         relay.leave(viewer)
 
 
-async def video_stream(request: HttpRequest) -> HttpResponse:
+async def video_stream(request: HttpRequest) -> HttpResponseBase:
     """MJPEG (multipart/x-mixed-replace) from the robot's camera; 503 + placeholder when it is down."""
     relay = get_relay()
     try:

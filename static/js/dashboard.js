@@ -1,9 +1,12 @@
 // The dashboard: live cards, alerts, the robot log, and the command cards.
 import { notify } from "./api.js";
 import { AlertStrip } from "./alerts.js";
+import { initAudio } from "./audio.js";
 import { initCommands } from "./commands.js";
 import { readConfig } from "./config.js";
+import { diagnosticAlerts } from "./diagnostic-alerts.js";
 import { live } from "./live.js";
+import { SensorsCard } from "./sensors.js";
 import { formatAge, formatTime } from "./time.js";
 
 const config = readConfig("live-config");
@@ -58,6 +61,15 @@ const renderers = {
   text_to_speech(m) { set("tts.last", m.data); },
   tts_feedback(m) { set("tts.feedback", m.data); },
   rosout(m, t) { logLine(m, t); },
+  bumper_state(m) {
+    const pressed = sensors.showBumpers(m);
+    alertIf("bumper", pressed.length > 0, `Bumper pressed: ${pressed.join(" and ")}`, "warn");
+  },
+  overlay_sonar(m) { sensors.showSonar(m); },
+  diagnostics_summary(m) {
+    sensors.showDiagnostics(m);
+    diagnostics(m);
+  },
 };
 
 // SMACH introspection: each container reports its active states; the chain from the
@@ -87,6 +99,8 @@ function renderHeadline() {
 // --- alerts strip ----------------------------------------------------------------------
 const alerts = new AlertStrip(document.getElementById("alerts"), { ttlS: config.alert_ttl_s });
 const alertIf = (id, on, text, level) => alerts.condition(id, on, text, level);
+const diagnostics = diagnosticAlerts(alerts);
+const sensors = new SensorsCard(document.getElementById("card-sensors"));
 
 // --- log console -----------------------------------------------------------------------
 const logBox = document.getElementById("log");
@@ -179,3 +193,4 @@ document.getElementById("reconnect-btn")?.addEventListener("click", () => {
 });
 tickAges();
 initCommands(document);
+initAudio(document.getElementById("audio"), config);

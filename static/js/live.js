@@ -3,10 +3,12 @@
 // subscriber the latest frame of a key already watched, and reports the link status.
 //
 //   import { live } from "./live.js";
-//   live.watch(["battery_soc"], (frame) => …);   // frame = {key, msg, t}
+//   const stop = live.watch(["battery_soc"], (frame) => …);   // frame = {key, msg, t}
+//   stop();                                      // keys no handler wants are unwatched
 //   live.onStatus((status) => …);                // {connected, link_running, since, url, …} or {server_down}
 //   live.onOpen(() => …);                        // after every (re)connect
 //   live.send({action: "reconnect"});
+//   const close = live.watchTopic("/rosout", (frame) => …);   // any topic of the robot's, by name
 import { site, socketURL, toLogin } from "./config.js";
 import { notify } from "./notices.js";
 
@@ -21,7 +23,34 @@ class Live {
   #latest = new Map(); // key -> last frame
   #statusHandlers = new Set();
   #openHandlers = new Set();
+  #topics = new Map(); // topic name -> Set(handler) (the topics page: frames under "topic:<name>")
   status = null;
+
+  // Any topic of the robot's by name (summarised by the server); returns a function that closes it.
+  watchTopic(name, handler) {
+    const key = `topic:${name}`;
+    if (!this.#topics.has(name)) {
+      this.#topics.set(name, new Set());
+      this.send({ action: "watch_topic", topic: name });
+    }
+    this.#topics.get(name).add(handler);
+    if (!this.#handlers.has(key)) this.#handlers.set(key, new Set());
+    this.#handlers.get(key).add(handler);
+    const last = this.#latest.get(key);
+    if (last) queueMicrotask(() => handler(last));
+    this.start();
+    return () => {
+      const set = this.#topics.get(name);
+      set?.delete(handler);
+      this.#handlers.get(key)?.delete(handler);
+      if (set && !set.size) {
+        this.#topics.delete(name);
+        this.#handlers.delete(key);
+        this.#latest.delete(key);
+        this.send({ action: "unwatch_topic", topic: name });
+      }
+    };
+  }
 
   // Subscribe handler to frames of keys; returns a function that unsubscribes.
   watch(keys, handler) {
@@ -34,7 +63,19 @@ class Live {
     }
     if (fresh.length) this.send({ action: "watch", keys: fresh });
     this.start();
-    return () => keys.forEach((k) => this.#handlers.get(k)?.delete(handler));
+    return () => this.#unwatch(keys, handler);
+  }
+
+  // A key nobody on the page listens to any more is no longer sent by the server.
+  #unwatch(keys, handler) {
+    const gone = [];
+    for (const key of keys) {
+      const set = this.#handlers.get(key);
+      if (!set) continue;
+      set.delete(handler);
+      if (!set.size) { this.#handlers.delete(key); this.#latest.delete(key); gone.push(key); }
+    }
+    if (gone.length) this.send({ action: "unwatch", keys: gone });
   }
 
   onStatus(handler) {
@@ -47,7 +88,8 @@ class Live {
 
   send(obj) {
     if (this.#ws?.readyState === WebSocket.OPEN) this.#ws.send(JSON.stringify(obj));
-    else if (obj.action !== "watch") this.#queue.push(obj); // watches are re-sent on open anyway
+    // watches are re-sent on open anyway, and a fresh socket watches nothing to unwatch
+    else if (!["watch", "unwatch", "watch_topic", "unwatch_topic"].includes(obj.action)) this.#queue.push(obj);
   }
 
   start() {
@@ -67,7 +109,9 @@ class Live {
     ws.onopen = () => {
       this.#delay = 500;
       document.body.classList.remove("socket-down");
-      if (this.#handlers.size) ws.send(JSON.stringify({ action: "watch", keys: [...this.#handlers.keys()] }));
+      const keys = [...this.#handlers.keys()].filter((k) => !k.startsWith("topic:"));
+      if (keys.length) ws.send(JSON.stringify({ action: "watch", keys }));
+      for (const name of this.#topics.keys()) ws.send(JSON.stringify({ action: "watch_topic", topic: name }));
       while (this.#queue.length) ws.send(JSON.stringify(this.#queue.shift()));
       for (const fn of this.#openHandlers) fn();
     };

@@ -1,10 +1,11 @@
 // The map page: the server-rendered map image with a live overlay (robot, path, goal,
 // named locations), zoom/pan/pinch, press-drag-release goals and initial poses.
-import { deleteJSON, getJSON, notify, postJSON } from "./api.js";
+import { deleteJSON, getJSON, notify, postJSON, request } from "./api.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
 import { attachGestures } from "./map/gestures.js";
+import { OVERLAYS, Overlays } from "./map/overlays.js";
 import { formatMetres, quaternionToYaw, scaleBar, View } from "./map/view.js";
 
 const config = readConfig("map-config");
@@ -43,7 +44,8 @@ function scheduleDraw() {
     drawQueued = false;
     const dpr = window.devicePixelRatio || 1;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-    drawOverlay(ctx, view, { ...state, goal: currentGoal() });
+    drawOverlay(ctx, view, { ...state, goal: currentGoal(), overlays }, dpr);
+    renderOverlayNotes();
     if (view.meta && img.complete && img.naturalWidth) root.dataset.ready = "1";
   });
 }
@@ -97,6 +99,47 @@ function showMap(meta) {
   img.src = meta.image_url;
 }
 
+// --- overlays (laser, costmaps, particles, footprint, local plan) ------------------------
+
+const overlays = new Overlays({
+  enabled: config.overlays,
+  redraw: scheduleDraw,
+  async save(name, on) {
+    try { await request("PATCH", config.urls.overlays, { [name]: on }); } catch (err) { notify(`Overlay not saved: ${err.message}`, "error"); }
+  },
+});
+
+function renderOverlayToggles() {
+  const list = $("overlay-list");
+  for (const o of OVERLAYS) {
+    const li = document.createElement("li");
+    const label = document.createElement("label");
+    const box = document.createElement("input");
+    box.type = "checkbox";
+    box.dataset.overlay = o.name;
+    box.checked = Boolean(overlays.enabled[o.name]);
+    box.onchange = () => overlays.toggle(o.name, box.checked);
+    const swatch = document.createElement("span");
+    swatch.className = `swatch ov-${o.name}`;
+    label.append(box, swatch, ` ${o.label}`);
+    const note = document.createElement("span");
+    note.className = "muted small overlay-note";
+    note.dataset.note = o.name;
+    li.append(label, note);
+    list.append(li);
+  }
+}
+
+function renderOverlayNotes() {
+  for (const o of OVERLAYS) {
+    const el = document.querySelector(`[data-note="${o.name}"]`);
+    const text = overlays.describe(o.name);
+    if (el && el.textContent !== text) el.textContent = text;
+  }
+  const scan = overlays.enabled.scan && overlays.data.scan;
+  root.dataset.scanPoints = scan?.points ? String(scan.points.length / 2) : "";
+}
+
 // --- live updates ----------------------------------------------------------------------
 
 const onUpdate = {
@@ -108,6 +151,11 @@ const onUpdate = {
       `x ${state.robot.x.toFixed(2)} m · y ${state.robot.y.toFixed(2)} m · ${(state.robot.yaw * 180 / Math.PI).toFixed(0)}°`;
   },
   plan(m) { state.plan = (m.poses || []).map((p) => [p.pose.position.x, p.pose.position.y]); },
+  bumper_state(m) {
+    state.bumpers = m;
+    const pressed = [...(m.front_bumpers || []), ...(m.rear_bumpers || [])].some(Boolean);
+    root.dataset.bumped = pressed ? "1" : "";
+  },
   at_location(m) {
     state.currentLocation = m.name;
     $("current-location").textContent = m.name || "(none)";
@@ -257,7 +305,7 @@ $("save-pose-form").onsubmit = async (ev) => {
 // --- start -----------------------------------------------------------------------------
 
 window.cyborgMap = {
-  view, state,
+  view, state, overlays,
   // Page coordinates of a map point (tests aim the mouse with this).
   toClient(x, y) {
     const r = root.getBoundingClientRect();
@@ -267,6 +315,7 @@ window.cyborgMap = {
 };
 
 setMode("pan");
+renderOverlayToggles();
 renderLocations();
 renderGoal();
 new ResizeObserver(resize).observe(root);

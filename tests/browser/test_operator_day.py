@@ -1,5 +1,5 @@
 """What an operator meets every day, at a desktop and a phone width: alerts that can be
-dismissed and cleared and that expire, one time zone everywhere (labelled), every command
+dismissed and cleared and that expire on an open page, one time zone everywhere (labelled), every command
 confirmed, a scale on the map."""
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import pytest
 from django.conf import settings
 from playwright.sync_api import expect
 
+from dashboard.selectors import ALERT_TTL_S
 from tests.browser.support import login
 
 pytestmark = pytest.mark.browser
@@ -78,6 +79,22 @@ def test_alerts_have_a_time_a_dismiss_and_stay_cleared(sized_page, stack):
     expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)  # …but the cleared alerts stay away
     robot_logs(stack, node, "laser driver died again")
     expect(alert).to_contain_text("laser driver died again")
+
+
+def test_an_alert_expires_on_an_open_page(sized_page, stack):
+    page = sized_page
+    node = f"/expiring_{page.width_name}"
+    page.clock.install()  # the page's clock runs on as usual until it is moved forward
+    login(page, stack, "otto")
+    expect(page.locator("#link-pill")).to_have_text("robot online")
+    robot_logs(stack, node, "sonar timeout")
+    alert = page.locator(f'.alert[data-alert="log-{node}"]')
+    expect(alert).to_be_visible()
+    page.clock.run_for((ALERT_TTL_S - 60) * 1000)  # not yet
+    expect(alert).to_be_visible()
+    page.clock.run_for(120 * 1000)
+    expect(alert).to_have_count(0)
+    expect(page.locator(".log-line", has_text=f"{node}: sonar timeout").first).to_be_visible()  # the log keeps it
 
 
 def test_times_are_in_the_site_zone_and_labelled(sized_page, stack):

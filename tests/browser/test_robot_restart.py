@@ -42,6 +42,10 @@ def test_a_robot_restart_greys_the_camera_disables_driving_and_leaves_no_stale_s
                 expect(drive.locator("#camera-placeholder")).to_be_visible()
                 expect(drive.locator("#camera-placeholder")).to_contain_text("Camera unavailable")
                 expect(drive.locator("#camera-age")).to_contain_text(re.compile("last frame|no frame"))
+                # Greyed out only once the last frame is 2 s old.
+                said = drive.locator("#camera-age").inner_text()
+                age = re.match(r"last frame (\d+) s ago", said)
+                assert "just now" not in said and (age is None or int(age[1]) >= 2), said
             desk = drives[0]
             desk.locator("#drive h2").click()
             desk.keyboard.down("w")

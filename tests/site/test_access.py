@@ -5,7 +5,8 @@ import pytest
 from tests.helpers import ws_communicator
 
 
-@pytest.mark.parametrize("path", ["/", "/map/", "/drive/", "/history/", "/activity/"])
+@pytest.mark.parametrize("path", ["/", "/map/", "/drive/", "/topics/", "/statemachine/", "/diagnostics/",
+                                  "/history/", "/activity/"])
 def test_it_redirects_anonymous_pages_to_login(client, db, path):
     response = client.get(path)
     assert response.status_code == 302
@@ -66,3 +67,4 @@ def test_it_reports_health_without_login(client, db, settings):
     assert response.status_code == 200
     assert response.json()["connected"] is False
     assert response.json()["robot_url"] == settings.ROSBRIDGE_URL
+    assert response.json()["video_url"] == settings.VIDEO_URL

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import http.cookiejar
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
 import tempfile
 import time
+import urllib.parse
 import urllib.request
 from pathlib import Path
 
@@ -23,6 +26,18 @@ pytestmark = pytest.mark.skipif(bool(os.environ.get("DATABASE_URL")), reason="ru
 def _health(port: int) -> dict:
     with urllib.request.urlopen(f"http://127.0.0.1:{port}/healthz", timeout=2) as res:
         return json.loads(res.read())
+
+
+def _logged_in(port: int, username: str, password: str) -> urllib.request.OpenerDirector:
+    jar = http.cookiejar.CookieJar()
+    opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar))
+    url = f"http://127.0.0.1:{port}/accounts/login/"
+    opener.open(url, timeout=10).read()
+    token = next(c.value for c in jar if c.name == "csrftoken")
+    body = urllib.parse.urlencode({"username": username, "password": password, "csrfmiddlewaretoken": token})
+    with opener.open(urllib.request.Request(url, data=body.encode(), headers={"Referer": url}), timeout=10) as res:
+        assert "/accounts/login/" not in res.url, "the printed admin password did not log in"
+    return opener
 
 
 def _listening(port: int) -> bool:
@@ -52,7 +67,15 @@ def test_make_run_with_other_ports_connects_to_the_simulator_it_started():
                 time.sleep(0.2)
             assert health.get("connected"), log.read_text()[-3000:]
             assert health["robot_url"] == f"ws://127.0.0.1:{ports['SIM_PORT']}"
+            assert health["video_url"] == f"http://127.0.0.1:{ports['VIDEO_PORT']}"
             assert f"talks to ws://127.0.0.1:{ports['SIM_PORT']}" in log.read_text()
+            # The camera through the server comes from the simulator's video server, as the first admin sees it.
+            password = re.search(r"Log in as\s+admin / (\S+)", log.read_text())
+            assert password, log.read_text()[-3000:]
+            opener = _logged_in(ports["PORT"], "admin", password[1])
+            with opener.open(f"http://127.0.0.1:{ports['PORT']}/video/snapshot", timeout=10) as res:
+                assert res.headers["Content-Type"] == "image/jpeg"
+                assert res.read(3) == b"\xff\xd8\xff"
         finally:
             os.killpg(make.pid, signal.SIGINT)  # what Ctrl-C in the terminal does
             try:

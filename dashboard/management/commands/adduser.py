@@ -1,3 +1,6 @@
+from argparse import ArgumentParser
+from typing import Any
+
 from django.core.management.base import BaseCommand, CommandError
 
 from cyborg_site.roles import Role
@@ -7,12 +10,12 @@ from dashboard.accounts import create_user
 class Command(BaseCommand):
     help = "Create a user (or reset its password) with a role: viewer, operator or admin."
 
-    def add_arguments(self, parser) -> None:
+    def add_arguments(self, parser: ArgumentParser) -> None:
         parser.add_argument("username")
         parser.add_argument("--role", choices=[r.value for r in Role], default=Role.VIEWER.value)
         parser.add_argument("--password", help="Default: a random one, printed.")
 
-    def handle(self, *args, username: str, role: str, password: str | None, **options) -> None:
+    def handle(self, *args: Any, username: str, role: str, password: str | None, **options: Any) -> None:
         if not username.strip():
             raise CommandError("username must not be empty")
         _, password = create_user(username, Role(role), password=password)

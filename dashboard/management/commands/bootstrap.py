@@ -1,3 +1,5 @@
+from typing import Any
+
 from django.contrib.auth.models import User
 from django.core.management.base import BaseCommand
 
@@ -10,7 +12,7 @@ class Command(BaseCommand):
     help = ("First run: role groups, default recording policies and, if there is no admin yet, an 'admin' "
             "account whose password is printed.")
 
-    def handle(self, *args, **options) -> None:
+    def handle(self, *args: Any, **options: Any) -> None:
         ensure_role_groups()
         created = ensure_default_policies()
         if created:

@@ -1,4 +1,4 @@
-// The live overlay: locations, planned path, goal, robot, and the arrow being dragged.
+// The live overlay: costmaps and sensor overlays, locations, planned path, goal, robot, and the arrow being dragged.
 
 const COLORS = {
   robot: "#1f8f86", robotEdge: "#0b4f4a", plan: "#2f6fd6", goal: "#d9822b", done: "#1f8f4e",
@@ -60,7 +60,23 @@ function drawGoal(ctx, view, goal) {
   ctx.globalAlpha = 1;
 }
 
-function drawRobot(ctx, view, robot) {
+// A pressed bumper as a red arc on the robot's front or rear (bumper_state: one flag per segment).
+function drawBumpers(ctx, r, bumpers) {
+  const sides = [[bumpers?.front_bumpers, 0], [bumpers?.rear_bumpers, Math.PI]];
+  ctx.strokeStyle = COLORS.failed; ctx.lineWidth = Math.max(3, r * 0.3); ctx.lineCap = "round";
+  for (const [flags, centre] of sides) {
+    if (!flags?.length) continue;
+    const span = Math.PI * 0.8, step = span / flags.length;
+    flags.forEach((pressed, i) => {
+      if (!pressed) return;
+      // Segments run from the robot's right to its left (screen angles: y down, so negate).
+      const a = centre - span / 2 + i * step;
+      ctx.beginPath(); ctx.arc(0, 0, r * 1.45, -(a + step) + 0.04, -a - 0.04); ctx.stroke();
+    });
+  }
+}
+
+function drawRobot(ctx, view, robot, bumpers) {
   if (!robot) return;
   const [sx, sy] = view.toScreen(robot.x, robot.y);
   const r = Math.max(8, view.metres(0.3)); // the Pioneer LX is ~0.7 m long
@@ -71,16 +87,20 @@ function drawRobot(ctx, view, robot) {
   ctx.closePath();
   ctx.fillStyle = COLORS.robot; ctx.fill();
   ctx.lineWidth = 2; ctx.strokeStyle = COLORS.robotEdge; ctx.stroke();
+  drawBumpers(ctx, r, bumpers);
   ctx.restore();
 }
 
-export function drawOverlay(ctx, view, s) {
+// s.overlays (map/overlays.js): costmaps under everything, sensor shapes over the path.
+export function drawOverlay(ctx, view, s, dpr = 1) {
   ctx.clearRect(0, 0, ctx.canvas.width, ctx.canvas.height);
   if (!view.meta) return;
+  s.overlays?.drawUnder(ctx, view, dpr);
   drawLocations(ctx, view, s.locations, s.currentLocation);
   drawPlan(ctx, view, s.plan);
+  s.overlays?.drawOver(ctx, view);
   drawGoal(ctx, view, s.goal);
-  drawRobot(ctx, view, s.robot);
+  drawRobot(ctx, view, s.robot, s.bumpers);
   if (s.drag) {
     const [sx, sy] = view.toScreen(s.drag.x, s.drag.y);
     const color = s.drag.mode === "pose" ? COLORS.pose : COLORS.goal;

@@ -1,0 +1,57 @@
+"""The Topics page in a real browser: it lists /rosout, shows its messages live, and plots a field."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from robot import interface as ri
+from tests.browser.support import login
+
+pytestmark = pytest.mark.browser
+
+ROSOUT = ri.topic("rosout").name
+ODOM = ri.topic("odom").name
+# Pixels of the first plotted series' colour (#1f6feb) on the plot's canvas.
+SERIES_PIXELS = """() => {
+    const canvas = document.querySelector('#topic-plot canvas');
+    if (!canvas) return 0;
+    const data = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+    let n = 0;
+    for (let i = 0; i < data.length; i += 4) {
+        if (Math.abs(data[i] - 31) < 40 && Math.abs(data[i + 1] - 111) < 40 && Math.abs(data[i + 2] - 235) < 40
+            && data[i + 3] > 0) n++;
+    }
+    return n;
+}"""
+
+
+def test_the_topics_page_lists_rosout_and_shows_its_messages_live(stack, page):
+    login(page, stack, "vera", next_path="/topics/")
+    row = page.locator(f"tr.topic-row[data-topic='{ROSOUT}']")
+    expect(row).to_be_visible(timeout=20_000)
+    expect(row).to_contain_text("rosgraph_msgs/Log")
+    page.fill("#topics-search", "rosgraph")
+    expect(page.locator("tr.topic-row")).to_have_count(1)
+    row.locator(".topic-open").click()
+    expect(page.locator("#topic-name")).to_have_text(ROSOUT)
+    meta = page.locator("#topic-meta")
+    expect(meta).to_contain_text("received", timeout=20_000)
+    expect(page.locator("#topic-message .key", has_text="msg")).to_be_visible()
+    first = meta.inner_text()
+    # The simulator logs every few seconds: a newer message replaces the one shown.
+    expect(meta).not_to_have_text(first, timeout=30_000)
+    # A viewer may watch but not record.
+    expect(page.locator("#topic-record")).to_be_disabled()
+
+
+def test_clicking_a_number_plots_it_live(stack, page):
+    login(page, stack, "vera", next_path=f"/topics/?topic={ODOM}")
+    expect(page.locator("#topic-meta")).to_contain_text("received", timeout=20_000)
+    page.locator("#topic-pause").click()  # the tree holds still while we open it; the plot keeps going
+    for part in ("header", "stamp"):
+        page.locator("#topic-message summary", has=page.locator(".key", has_text=part)).first.click()
+    page.locator("#topic-message .row", has=page.locator(".key", has_text="secs")).locator(".num").first.click()
+    expect(page.locator("#topic-plot canvas").first).to_be_visible()
+    expect(page.locator("#topic-plot-fields")).to_contain_text("header.stamp.secs")
+    page.wait_for_function(f"({SERIES_PIXELS})() > 20", timeout=15_000)
