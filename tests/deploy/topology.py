@@ -16,6 +16,7 @@ import subprocess
 import tempfile
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 from pathlib import Path
 
@@ -154,6 +155,10 @@ class Topology:
         return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}"
                          for p in sorted((self.dir / "logs").glob("*.log")))
 
+    def started(self, name: str) -> int:
+        """How many times the link ``name`` has come up as standby (its log says so each time)."""
+        return self.log(name).count("standby, waiting for the lease")
+
     def active_link(self) -> str | None:
         """The name of the link holding the lease (its token starts with the holder's name)."""
         import redis
@@ -163,6 +168,32 @@ class Topology:
         except redis.RedisError:
             return None
         return token.decode().split(":", 1)[0] if token else None
+
+    def store_entry(self, key: str) -> dict:
+        """One entry of the latest-state store ({} when absent or Redis is down)."""
+        import redis
+
+        try:
+            raw = redis.Redis.from_url(self.redis_url, socket_timeout=0.5).hget(f"{self.prefix}:latest-state", key)
+        except redis.RedisError:
+            return {}
+        return json.loads(raw) if raw else {}
+
+    def received(self, topic: str) -> list[dict]:
+        """Every message the simulator received on ``topic`` (its own record, the robot's side)."""
+        query = urllib.parse.urlencode({"topic": topic, "last": 10_000})
+        url = f"http://127.0.0.1:{self.env['STACK_VIDEO_PORT']}/sim/received?{query}"
+        with urllib.request.urlopen(url, timeout=5) as res:
+            return [m["msg"] for m in json.loads(res.read())["messages"]]
+
+    def recorded_seqs(self, database_url: str, topic: str) -> list[int]:
+        """header.seq of every recorded message of ``topic``, in order."""
+        import psycopg
+
+        with psycopg.connect(database_url.replace("postgres://", "postgresql://"), connect_timeout=5) as conn:
+            rows = conn.execute("SELECT (data->'header'->>'seq')::bigint FROM history_sample WHERE topic = %s "
+                                "ORDER BY 1", [topic]).fetchall()
+        return [seq for (seq,) in rows]
 
     # --- HTTP through nginx, or straight to one web process -----------------------------
 
