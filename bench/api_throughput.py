@@ -1,7 +1,9 @@
 """REST API under load, through the real stack (simulator + Daphne, embedded).
 
 1. ``GET /api/robot/state/`` with a token, 50 connections kept alive, for 20 s:
-   ``state_api_rps``, ``state_api_p99_ms`` (and p50).
+   ``state_api_rps``, ``state_api_p99_ms`` (and p50), with the server's CPU and the load average.
+   The load comes from wrk (C, ``make wrk``) so the client does not measure itself; without wrk,
+   from an aiohttp client in this process (``state_api_client`` says which).
 2. 200 sequential speech commands, API call → the message's arrival at the simulator (the
    simulator stamps every message it receives with its wall clock; same machine, same clock):
    ``command_to_robot_p50_ms``, ``command_to_robot_p99_ms``; and the API round trip.
@@ -14,6 +16,10 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import os
+import re
+import shutil
+import subprocess
 import sys
 import time
 import urllib.parse
@@ -36,9 +42,6 @@ log = logging.getLogger("bench.api_throughput")
 CONNECTIONS = 50
 DURATION_S = 20.0
 SPEECH_N = 200
-
-
-
 
 
 async def hammer(url: str, token: str) -> tuple[int, list[float], int]:
@@ -64,6 +67,69 @@ async def hammer(url: str, token: str) -> tuple[int, list[float], int]:
         await asyncio.gather(*(worker(session) for _ in range(CONNECTIONS)))
         elapsed = time.monotonic() - started
     return round(len(latencies) / elapsed), sorted(latencies), errors
+
+
+_WRK_TIME = re.compile(r"([\d.]+)(us|ms|s)\b")
+_WRK_UNITS = {"us": 0.001, "ms": 1.0, "s": 1000.0}
+
+
+def wrk_ms(text: str) -> float:
+    match = _WRK_TIME.fullmatch(text)
+    if not match:
+        raise ValueError(f"wrk printed {text!r}")
+    return float(match[1]) * _WRK_UNITS[match[2]]
+
+
+def wrk(url: str, token: str) -> dict[str, float]:
+    """wrk's figures: requests/s, p50 and p99 latency (ms), errors (non-2xx and socket errors)."""
+    out = subprocess.run(
+        ["wrk", "-t", "2", "-c", str(CONNECTIONS), "-d", f"{DURATION_S:.0f}s", "--latency",
+         "-H", f"Authorization: Token {token}", url],
+        capture_output=True, text=True, timeout=DURATION_S + 60, check=True,
+    ).stdout
+    figures = {"rps": float(re.search(r"Requests/sec:\s+([\d.]+)", out)[1]),  # type: ignore[index]
+               "p50": wrk_ms(re.search(r"\b50%\s+(\S+)", out)[1]),  # type: ignore[index]
+               "p99": wrk_ms(re.search(r"\b99%\s+(\S+)", out)[1]),  # type: ignore[index]
+               "errors": 0.0}
+    if non_2xx := re.search(r"Non-2xx or 3xx responses:\s+(\d+)", out):
+        figures["errors"] += int(non_2xx[1])
+    if socket_errors := re.search(r"Socket errors: connect (\d+), read (\d+), write (\d+), timeout (\d+)", out):
+        figures["errors"] += sum(int(n) for n in socket_errors.groups())
+    return figures
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def state_api(stack: Stack, token: str) -> None:
+    url = f"{stack.url}/api/robot/state/"
+    call_get(url, token)  # the first request checks the token against the database and caches it
+    cpu0, t0 = cpu_seconds(stack.web.pid), time.monotonic()
+    if shutil.which("wrk"):
+        figures, client = wrk(url, token), "wrk"
+    else:
+        rps, latencies, errors = asyncio.run(hammer(url, token))
+        figures = {"rps": rps, "p50": quantile(latencies, 0.5), "p99": quantile(latencies, 0.99), "errors": errors}
+        client = "aiohttp"
+    cpu_s = cpu_seconds(stack.web.pid) - cpu0
+    cpu = cpu_s / (time.monotonic() - t0) * 100
+    print(f"state_api_client: {client}")
+    print(f"state_api_rps: {figures['rps']:.0f}")
+    print(f"state_api_p50_ms: {figures['p50']:.1f}")
+    print(f"state_api_p99_ms: {figures['p99']:.1f}")
+    print(f"state_api_errors: {figures['errors']:.0f}")
+    print(f"state_api_server_cpu_pct: {cpu:.0f}")
+    # The server's CPU per request: what the load average does not blur.
+    print(f"state_api_server_cpu_ms_per_request: {cpu_s * 1000 / max(1.0, figures['rps'] * DURATION_S):.2f}")
+    print(f"state_api_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
+
+
+def call_get(url: str, token: str) -> dict:
+    request = urllib.request.Request(url, headers={"Authorization": f"Token {token}"})
+    with urllib.request.urlopen(request, timeout=10) as res:
+        return json.loads(res.read())
 
 
 def received(stack: Stack, topic: str, last: int) -> dict:
@@ -99,17 +165,17 @@ def main() -> None:
         stack.wait_robot_online()
         token = call(f"{stack.url}/api/auth/token/", {"username": "otto", "password": PASSWORD})["token"]
         log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
-        rps, latencies, errors = asyncio.run(hammer(f"{stack.url}/api/robot/state/", token))
-        print(f"state_api_rps: {rps}")
-        print(f"state_api_p50_ms: {quantile(latencies, 0.5):.1f}")
-        print(f"state_api_p99_ms: {quantile(latencies, 0.99):.1f}")
-        print(f"state_api_errors: {errors}", flush=True)
+        state_api(stack, token)
         log.info("%d sequential speech commands", SPEECH_N)
+        cpu0 = cpu_seconds(stack.web.pid)
         to_robot, round_trips = speech_commands(stack, token)
+        cpu_ms = (cpu_seconds(stack.web.pid) - cpu0) * 1000 / SPEECH_N
         print(f"command_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
         print(f"command_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
         print(f"command_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
         print(f"command_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
+        print(f"command_server_cpu_ms: {cpu_ms:.2f}")
+        print(f"command_loadavg: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """Two-way audio through the real product: push-to-talk chunk → the robot's speaker topic,
-robot microphone chunk → a listening client, gaps in 30 s of talk, and the upstream
-subscriptions 20 listeners cost.
+robot microphone chunk → a listening client, gaps in 30 s of talk, the upstream
+subscriptions 20 listeners cost, how soon a talker who goes quiet or disconnects is cut, and
+what decoding an mp3 microphone costs the link per chunk.
 
 Starts Daphne (embedded default) against a simulator hosted in this process (its microphone
 silent, so the bench injects numbered chunks and knows when each left the robot). Python
@@ -27,7 +28,8 @@ from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
 from bench.teleop_latency import login  # noqa: E402
 from robot import interface as ri  # noqa: E402
-from robot.sim.audio import tone  # noqa: E402
+from robot.audio.mic import decoder_for  # noqa: E402
+from robot.sim.audio import Microphone, tone  # noqa: E402
 from robot.sim.harness import SimThread  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 
@@ -121,6 +123,50 @@ async def listen(stack: Stack, sim: SimThread, cookie: str) -> tuple[list[float]
     return latencies, upstream
 
 
+CUTS = 5
+
+
+async def cuts(stack: Stack, cookie: str) -> tuple[list[float], list[float]]:
+    """How long after a talker's last chunk the server ends the talk (quiet), and after a
+    talker's socket closes another page hears the talk lock free (disconnect)."""
+    quiet, gone = [], []
+    watcher = await audio_socket(stack, cookie)
+    for i in range(CUTS * 2):
+        ws = await audio_socket(stack, cookie)
+        await ws.send(json.dumps(TALK))
+        await until(ws, "talking")
+        last = time.monotonic()
+        for k in range(10):
+            await ws.send(tone(300, k * CHUNK, CHUNK, 16000))
+            last = time.monotonic()
+            await asyncio.sleep(0.02)
+        if i % 2 == 0:
+            await until(ws, "talking")
+            quiet.append((time.monotonic() - last) * 1000)
+            await ws.close()
+        else:
+            closed = time.monotonic()
+            await ws.close()
+            while True:
+                frame = await until(watcher, "talker")
+                if frame["holder"] is None and frame["reason"] == "disconnect":
+                    break
+            gone.append((time.monotonic() - closed) * 1000)
+    await watcher.close()
+    return quiet, gone
+
+
+def mp3_decode_us() -> float:
+    """The link's cost to decode one 20 ms chunk of the simulator's mp3 microphone."""
+    mic = Microphone(lambda _m: None, lambda: True, coding="mp3")
+    chunks = [mic.encode(tone(440, i * CHUNK, CHUNK, 16000)) for i in range(1500)]
+    decoder = decoder_for(mic.info())
+    start = time.perf_counter()
+    for chunk in chunks:
+        decoder.feed(chunk)
+    return (time.perf_counter() - start) / len(chunks) * 1e6
+
+
 async def main() -> None:
     with SimThread(port=0, video_port=0, startup_s=0.5, mic_tone_hz=0) as sim:
         with Stack(sim=False, env={"ROSBRIDGE_URL": sim.url}) as stack:
@@ -128,11 +174,15 @@ async def main() -> None:
             cookie = login(stack, "otto")
             talk_ms, gap_pct = await talk(stack, sim, cookie)
             mic_ms, upstream = await listen(stack, sim, cookie)
+            quiet_ms, gone_ms = await cuts(stack, cookie)
     print(f"talk_chunk_to_robot_p50_ms: {statistics.median(talk_ms):.1f}")
     print(f"talk_chunk_to_robot_p99_ms: {percentile(talk_ms, 99):.1f}")
     print(f"robot_mic_to_client_p99_ms: {percentile(mic_ms, 99):.1f}")
     print(f"talk_gap_pct: {gap_pct:.2f}")
     print(f"listen_clients_upstream_subscriptions: {upstream}")
+    print(f"talk_quiet_cut_max_ms: {max(quiet_ms):.1f}")
+    print(f"talk_disconnect_release_max_ms: {max(gone_ms):.1f}")
+    print(f"mic_mp3_decode_per_chunk_us: {mp3_decode_us():.1f}")
 
 
 if __name__ == "__main__":

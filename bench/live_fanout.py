@@ -11,7 +11,7 @@ newer one reached that client within 1 s.
 Second section, scaled: a private Redis, ``manage.py robotlink`` and two Daphne processes, with
 1000 clients split across the two.
 
-Run: ``.venv/bin/python bench/live_fanout.py`` (no arguments, ~4 min). Prints ``name: value``.
+Run: ``.venv/bin/python bench/live_fanout.py`` (no arguments, ~3 min on a quiet machine). Prints ``name: value``.
 The client process is this file run with ``--clients`` (internal).
 """
 
@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from _stats import quantile  # noqa: E402
-from websockets.asyncio.client import connect  # noqa: E402
+from picows import WSFrame, WSListener, WSMsgType, WSTransport, ws_connect  # noqa: E402
 from websockets.exceptions import ConnectionClosed  # noqa: E402
 
 from robot import interface as ri  # noqa: E402
@@ -44,11 +44,14 @@ log = logging.getLogger("bench.live_fanout")
 
 SIZES = (50, 200, 500)
 SCALED = 1000
-BATCH = 50  # connections opened at once
-WARMUP_S = 2.0
-MEASURE_S = 10.0
+BATCH = 50  # connections opened at once per web process (shared by its client processes)
+WARMUP_S = 1.5
+MEASURE_S = 6.0
 LOST_AFTER_S = 1.0
 IDLE_SOCKETS = 200
+# Client processes per web process: one Python process reading hundreds of sockets would measure
+# itself (its CPU is printed as *_client_cpu_pct so a saturated client shows).
+CLIENT_PROCS = 2
 PROBE_KEY = "odom"
 HOME_KEYS = (
     "battery_soc", "battery_voltage", "battery_recharge_state", "motors_state", "robot_mode",
@@ -61,18 +64,18 @@ KEYS = [*HOME_KEYS, PROBE_KEY]
 # --- the client process ----------------------------------------------------------------
 
 
-# The probe's stamp read straight from the text: parsing every frame's JSON would make the client
-# process, not the server, the bottleneck at 1000 sockets. Product fragments are compact JSON
+# The probe's stamp read straight from the bytes: parsing every frame's JSON would make the client
+# process, not the server, the bottleneck. Product fragments are compact JSON
 # {"key":"odom","msg":{"header":{...,"stamp":{...}}}}; rosbridge messages carry "topic":"/odom".
-_STAMP = r'"header":\s*\{[^{}]*"stamp":\s*\{\s*"secs":\s*(\d+),\s*"nsecs":\s*(\d+)'
-PRODUCT_PROBE = re.compile(r'"key":"odom","msg":\{' + _STAMP)
+_STAMP = rb'"header":\s*\{[^{}]*"stamp":\s*\{\s*"secs":\s*(\d+),\s*"nsecs":\s*(\d+)'
+PRODUCT_PROBE = re.compile(rb'"key":"odom","msg":\{' + _STAMP)
 DIRECT_PROBE = re.compile(_STAMP)
 
 
-def probe_stamps(raw: str, direct: bool) -> list[float]:
+def probe_stamps(raw: bytes, direct: bool) -> list[float]:
     """The probe's send times in one frame (product frame or rosbridge message)."""
     if direct:
-        if '"/odom"' not in raw:
+        if b'"/odom"' not in raw:
             return []
         found = DIRECT_PROBE.findall(raw)[:1]
     else:
@@ -80,49 +83,76 @@ def probe_stamps(raw: str, direct: bool) -> list[float]:
     return [int(secs) + int(nsecs) / 1e9 for secs, nsecs in found]
 
 
-async def client(url: str, cookie: str, mode: str, window: list[float], out: list[tuple[float, float]],
-                 opened: asyncio.Future) -> None:
+class Listener(WSListener):
+    """One client socket (picows: frames arrive as callbacks straight from the read, so the receive
+    time is taken before anything else, and a frame costs microseconds, not an asyncio task switch)."""
+
+    def __init__(self, direct: bool, window: list[float]) -> None:
+        self.direct = direct
+        self.window = window
+        self.samples: list[tuple[float, float]] = []
+        self.first: asyncio.Future[bytes] = asyncio.get_running_loop().create_future()
+        self.partial: bytes | None = None
+
+    def on_ws_frame(self, transport: WSTransport, frame: WSFrame) -> None:
+        now = time.time()
+        if frame.msg_type == WSMsgType.CLOSE:
+            transport.disconnect()
+            return
+        if frame.msg_type == WSMsgType.CONTINUATION or not frame.fin:  # never sent in practice
+            self.partial = (self.partial or b"") + frame.get_payload_as_bytes()
+            if not frame.fin:
+                return
+            raw, self.partial = self.partial, None
+        elif frame.msg_type == WSMsgType.TEXT:
+            raw = frame.get_payload_as_bytes()
+        else:
+            return
+        if not self.first.done():
+            self.first.set_result(raw)
+            return
+        if self.window[0] <= now < self.window[1]:
+            for stamp in probe_stamps(raw, self.direct):
+                self.samples.append((stamp, now))
+
+
+async def client(url: str, cookie: str, mode: str, window: list[float]) -> Listener | Exception:
     direct = mode == "direct"
-    headers = {} if direct else {"Cookie": cookie}
-    origin = None if direct else url.replace("ws://", "http://").split("/ws/")[0]
+    headers = {} if direct else {"Cookie": cookie, "Origin": url.replace("ws://", "http://").split("/ws/")[0]}
     try:
-        ws = await connect(url, origin=origin, additional_headers=headers, max_size=None, open_timeout=30)
+        transport, listener = await ws_connect(lambda: Listener(direct, window), url, extra_headers=headers,
+                                               websocket_handshake_timeout=30, max_frame_size=1 << 26)
+        assert isinstance(listener, Listener)
         if direct:
+            listener.first.set_result(b"")
             for key in KEYS:
                 t = ri.topic(key)
-                await ws.send(json.dumps({"op": "subscribe", "topic": t.name, "type": t.type}))
+                transport.send(WSMsgType.TEXT, json.dumps({"op": "subscribe", "topic": t.name,
+                                                           "type": t.type}).encode())
         else:
-            first = json.loads(await asyncio.wait_for(ws.recv(), 30))
+            first = json.loads(await asyncio.wait_for(listener.first, 30))
             if first.get("kind") != "status":
                 raise RuntimeError(f"first frame was {first}")
             if mode == "watch":
-                await ws.send(json.dumps({"action": "watch", "keys": KEYS}))
+                transport.send(WSMsgType.TEXT, json.dumps({"action": "watch", "keys": KEYS}).encode())
     except Exception as exc:
-        opened.set_result(exc)
-        return
-    opened.set_result(None)
-    async with ws:
-        while True:
-            raw = await ws.recv()
-            now = time.time()
-            if now >= window[1]:
-                return
-            if now >= window[0]:
-                for stamp in probe_stamps(raw, direct):
-                    out.append((stamp, now))
+        return exc
+    return listener
 
 
 async def run_clients(urls: list[str], cookie: str, mode: str, n: int) -> dict:
     window = [float("inf"), float("inf")]
-    samples: list[list[tuple[float, float]]] = [[] for _ in range(n)]
-    tasks, failed = [], 0
-    for start in range(0, n, BATCH):
-        batch = []
-        for i in range(start, min(n, start + BATCH)):
-            opened = asyncio.get_running_loop().create_future()
-            tasks.append(asyncio.create_task(client(urls[i % len(urls)], cookie, mode, window, samples[i], opened)))
-            batch.append(opened)
-        failed += sum(1 for result in await asyncio.gather(*batch) if result is not None)
+    listeners: list[Listener] = []
+    failed = 0
+    step = BATCH // CLIENT_PROCS
+    for start in range(0, n, step):
+        batch = [client(urls[i % len(urls)], cookie, mode, window) for i in range(start, min(n, start + step))]
+        for result in await asyncio.gather(*batch):
+            if isinstance(result, Listener):
+                listeners.append(result)
+            else:
+                failed += 1
+                log.warning("client failed: %r", result)
     print("connected", flush=True)
     # The driver answers with the window's start (epoch seconds), the same for every client process.
     line = await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
@@ -130,8 +160,8 @@ async def run_clients(urls: list[str], cookie: str, mode: str, n: int) -> dict:
         return {"failed": failed}
     window[0] = float(line)
     window[1] = window[0] + MEASURE_S
-    await asyncio.sleep(max(0.0, window[1] - time.time()))
-    await asyncio.wait(tasks, timeout=15)
+    await asyncio.sleep(max(0.0, window[1] + 0.1 - time.time()))
+    samples = [listener.samples for listener in listeners] + [[] for _ in range(failed)]
     return {"failed": failed, "window": window, "samples": samples}
 
 
@@ -162,7 +192,7 @@ class Reference(threading.Thread):
             self.ready.set()
             try:
                 for raw in ws:
-                    self.stamps.extend(probe_stamps(raw, direct=True))
+                    self.stamps.extend(probe_stamps(raw.encode() if isinstance(raw, str) else raw, direct=True))
             except ConnectionClosed:
                 return  # the stack stopped
 
@@ -198,9 +228,22 @@ def wait_connected(proc: subprocess.Popen) -> None:
     raise RuntimeError(f"client process ended with {proc.wait()}")
 
 
+def profile(pids: list[int], name: str) -> list[subprocess.Popen]:
+    """With BENCH_PYSPY=DIR: py-spy samples each server process over the window (raw folded stacks)."""
+    out = os.environ.get("BENCH_PYSPY")
+    if not out:
+        return []
+    Path(out).mkdir(parents=True, exist_ok=True)
+    return [subprocess.Popen([str(Path(sys.executable).parent / "py-spy"), "record", "-p", str(pid), "-d",
+                              str(int(MEASURE_S)), "-r", "250", "-f", "raw", "-o", f"{out}/{name}-{pid}.txt"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for pid in pids]
+
+
 def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int]) -> dict:
-    """N clients: one client process per web process (each its share), one measuring window for all."""
-    procs = [spawn_clients([url], cookie, mode, n // len(urls) + (i < n % len(urls))) for i, url in enumerate(urls)]
+    """N clients from CLIENT_PROCS processes per web process (each its share), one measuring window for all."""
+    shares = [(url, n // (len(urls) * CLIENT_PROCS) + (i < n % (len(urls) * CLIENT_PROCS)))
+              for i, url in enumerate(urls * CLIENT_PROCS)]
+    procs = [spawn_clients([url], cookie, mode, share) for url, share in shares if share]
     for proc in procs:
         wait_connected(proc)
     start = time.time() + WARMUP_S
@@ -209,10 +252,17 @@ def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int
         proc.stdin.write(f"{start!r}\n")
         proc.stdin.flush()
     time.sleep(max(0.0, start - time.time()))
-    cpu0, t0 = cpu_seconds(server_pids), time.monotonic()
+    client_pids = [proc.pid for proc in procs]
+    profilers = profile(server_pids, f"{mode}-{n}")
+    cpu0, client0, t0 = cpu_seconds(server_pids), cpu_seconds(client_pids), time.monotonic()
     time.sleep(MEASURE_S)
-    cpu = (cpu_seconds(server_pids) - cpu0) / (time.monotonic() - t0) * 100
-    merged: dict = {"failed": 0, "samples": [], "cpu_pct": cpu}
+    for profiler in profilers:
+        profiler.wait(30)
+    elapsed = time.monotonic() - t0
+    cpu = (cpu_seconds(server_pids) - cpu0) / elapsed * 100
+    client_cpu = (cpu_seconds(client_pids) - client0) / elapsed * 100
+    merged: dict = {"failed": 0, "samples": [], "cpu_pct": cpu, "client_cpu_pct": client_cpu,
+                    "load": os.getloadavg()[0]}
     for proc in procs:
         assert proc.stdout is not None
         for line in proc.stdout:
@@ -267,7 +317,9 @@ def report(prefix: str, result: dict, sent: list[float]) -> None:
     print(f"{prefix}_p99_ms: {figures['p99']:.1f}")
     print(f"{prefix}_lost_pct: {figures['lost']:.2f}")
     print(f"{prefix}_handshakes_failed: {result['failed']}")
-    print(f"{prefix}_server_cpu_pct: {result['cpu_pct']:.0f}", flush=True)
+    print(f"{prefix}_server_cpu_pct: {result['cpu_pct']:.0f}")
+    print(f"{prefix}_client_cpu_pct: {result['client_cpu_pct']:.0f}")
+    print(f"{prefix}_loadavg: {result['load']:.1f}", flush=True)
 
 
 def embedded_section(sizes: tuple[int, ...]) -> None:
@@ -291,7 +343,9 @@ def embedded_section(sizes: tuple[int, ...]) -> None:
             result = drive([f"ws://127.0.0.1:{stack.sim_port}"], "", "direct", n, [stack.sim_proc.pid])
             figures = summarise(result, reference.stamps)
             print(f"direct_{n}_p50_ms: {figures['p50']:.1f}")
-            print(f"direct_{n}_p99_ms: {figures['p99']:.1f}", flush=True)
+            print(f"direct_{n}_p99_ms: {figures['p99']:.1f}")
+            print(f"direct_{n}_server_cpu_pct: {result['cpu_pct']:.0f}")
+            print(f"direct_{n}_client_cpu_pct: {result['client_cpu_pct']:.0f}", flush=True)
 
 
 def scaled_section() -> None:

@@ -25,10 +25,25 @@ PAGES = {
     "dashboard": ("/", '[data-field="battery.percent"]:text-matches("%")'),
     "map": ("/map/", '#map-view[data-ready="1"]'),
     "drive": ("/drive/", '#camera[data-state="live"]'),
+    "topics": ("/topics/", "#topics-rows tr"),
+    "statemachine": ("/statemachine/", "#smach-graph svg"),
+    "diagnostics": ("/diagnostics/", "#diagnostics-table tbody tr:not(.diag-empty)"),
     "history": ("/history/", "#plot-form"),
     "activity": ("/activity/", "#activity"),
     "admin": ("/admin/", "#content"),
+    "api": ("/api/docs/", ".swagger-ui .opblock"),
 }
+
+
+def with_unlisted(page, pages: dict[str, tuple[str, str]]) -> dict[str, tuple[str, str]]:
+    """``pages`` and every other page the navigation links to (named after its path, taken once
+    its main part is there), so a page added to the site is never left out; say so, for the README."""
+    linked = page.eval_on_selector_all(".mainnav a", "links => links.map(a => new URL(a.href).pathname)")
+    listed = {path for path, _ in pages.values()}
+    extra = {path.strip("/").replace("/", "-"): (path, "main") for path in linked if path not in listed}
+    for name in extra:
+        print(f"note: {extra[name][0]} is not listed in scripts/screenshots.py; shot as {name}-*.png", file=sys.stderr)
+    return {**pages, **extra}
 
 
 def main() -> None:
@@ -46,7 +61,7 @@ def main() -> None:
             context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1)
             page = context.new_page()
             login(page, stack, "ada")
-            for name, (path, ready) in PAGES.items():
+            for name, (path, ready) in with_unlisted(page, PAGES).items():
                 page.goto(f"{stack.url}{path}")
                 page.wait_for_selector(ready, timeout=20_000)
                 page.wait_for_timeout(1500)  # let live values arrive
