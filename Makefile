@@ -10,7 +10,7 @@ ROSBRIDGE_URL ?= ws://127.0.0.1:$(SIM_PORT)
 VIDEO_URL ?= http://127.0.0.1:$(VIDEO_PORT)
 STAMP := $(VENV)/.installed
 
-.PHONY: run test install browser nginx stack stack-down lint bench clean
+.PHONY: run test install browser nginx wrk stack stack-down lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -31,6 +31,12 @@ nginx:
 	@{ command -v nginx || test -x /usr/sbin/nginx; } >/dev/null 2>&1 && command -v openssl >/dev/null 2>&1 && command -v curl >/dev/null 2>&1 || { \
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq nginx openssl curl; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq nginx openssl curl; fi; }
+
+# Debian's wrk: the C load generator bench/api_throughput.py drives the state API with.
+wrk:
+	@command -v wrk >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq wrk; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq wrk; fi; }
 
 # The production topology on this machine (see README, "Deploy").
 stack: install nginx
@@ -55,7 +61,7 @@ lint: install
 	$(BIN)/ruff check .
 	env -u REDIS_URL -u DATABASE_URL $(BIN)/mypy
 
-bench: install
+bench: install wrk
 	for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b; done
 
 clean:
