@@ -2,10 +2,12 @@
 
 Runs the whole product (simulator + server, tests/stack.py) and Debian's Chromium; run it
 after a change to the pages:  .venv/bin/python scripts/screenshots.py
+or of some pages at one width:  .venv/bin/python scripts/screenshots.py statemachine topics --width phone
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import shutil
 import sys
@@ -49,6 +51,14 @@ def with_unlisted(page, pages: dict[str, tuple[str, str]]) -> dict[str, tuple[st
 def main() -> None:
     from playwright.sync_api import sync_playwright
 
+    parser = argparse.ArgumentParser(description="Screenshots of the pages into docs/screenshots/.")
+    parser.add_argument("pages", nargs="*", help="page names (default: every page)")
+    parser.add_argument("--width", choices=list(WIDTHS), action="append", help="default: every width")
+    args = parser.parse_args()
+    unknown = set(args.pages) - set(PAGES)
+    if unknown:
+        parser.error(f"unknown pages {sorted(unknown)}; known: {', '.join(PAGES)}")
+
     OUT.mkdir(parents=True, exist_ok=True)
     env = {k: v for k, v in os.environ.items() if k not in ("DATABASE_URL", "REDIS_URL")}
     os.environ.clear()
@@ -57,11 +67,14 @@ def main() -> None:
         stack.wait_robot_online()
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--headless=new", "--no-sandbox", "--disable-gpu"])
         for width_name, viewport in WIDTHS.items():
+            if args.width and width_name not in args.width:
+                continue
             phone = width_name == "phone"
             context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1)
             page = context.new_page()
             login(page, stack, "ada")
-            for name, (path, ready) in with_unlisted(page, PAGES).items():
+            pages = {n: PAGES[n] for n in args.pages} if args.pages else with_unlisted(page, PAGES)
+            for name, (path, ready) in pages.items():
                 page.goto(f"{stack.url}{path}")
                 page.wait_for_selector(ready, timeout=20_000)
                 page.wait_for_timeout(1500)  # let live values arrive
