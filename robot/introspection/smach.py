@@ -15,6 +15,11 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+# Graphviz sizes labels by its own font tables, not the browser's fonts. Monospace text is 0.6 em
+# a character in Courier and in every browser's monospace font, bold or not, so the room laid out
+# for a label is the room it takes on the page; a proportional font overflows it and labels overlap.
+FONT = '"Courier"'
+
 # (from child, outcome, to): the child's outcome leads to a sibling or to a container outcome.
 Edge = tuple[str, str, str]
 
@@ -89,9 +94,11 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
     ids = _Ids({}, {p: f"cluster_{i}" for i, p in enumerate(sorted(containers))})
     nodes: list[dict[str, Any]] = []
     edges: list[dict[str, Any]] = []
-    lines = ["digraph smach {", "compound=true; rankdir=TB; nodesep=0.3; ranksep=0.45;",
-             'node [shape=box, style="rounded,filled", fillcolor="#ffffff", fontname="sans-serif", fontsize=12];',
-             'edge [fontname="sans-serif", fontsize=10, arrowsize=0.7];']
+    # Left to right: the many sibling states stack down the page rather than across it, a shape
+    # that scrolls less inside a phone's card and shrinks less when fitted to a desktop's.
+    lines = ["digraph smach {", f"compound=true; rankdir=LR; nodesep=0.4; ranksep=0.6; fontname={FONT};",
+             f'node [shape=box, style="rounded,filled", fillcolor="#ffffff", fontname={FONT}, fontsize=12];',
+             f"edge [fontname={FONT}, fontsize=11, arrowsize=0.7];"]
     # With one root its children are the top level; several roots are each a box of their own.
     top = roots(containers)
     flat = top[0] if len(top) == 1 else None
@@ -108,7 +115,7 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
         boxed = path != flat
         if boxed:
             lines.append(f'{indent}subgraph {ids.clusters[path]} {{ id={_quote(ids.clusters[path])}; '
-                         f'label={_quote(c.name)}; style="rounded"; color="#8a96a3"; fontname="sans-serif";')
+                         f'label={_quote(c.name)}; style="rounded"; color="#8a96a3";')
         for child in c.children:
             child_path = f"{path}/{child}"
             if child_path in containers:

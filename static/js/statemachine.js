@@ -67,8 +67,26 @@ async function drawGraph(msg) {
     edges.push({ ...e, el });
   }
   box.replaceChildren(svg);
+  for (const e of edges) padLabel(e.el);
   drawn = { version: msg.version, nodes, clusters, edges };
   renderActive();
+}
+
+// A label's target reaches a little beyond its letters (a finger is wider than a word), yet not
+// into the next label's: the layout keeps labels at least twice LABEL_PAD apart.
+const LABEL_PAD = 4; // graph units (pt)
+function padLabel(edge) {
+  const text = edge.querySelector("text");
+  if (!text) return;
+  const b = text.getBBox(); // laid out: the svg is in the page
+  const rect = document.createElementNS("http://www.w3.org/2000/svg", "rect");
+  rect.setAttribute("class", "label-hit");
+  rect.setAttribute("x", b.x - LABEL_PAD);
+  rect.setAttribute("y", b.y - LABEL_PAD);
+  rect.setAttribute("width", b.width + 2 * LABEL_PAD);
+  rect.setAttribute("height", b.height + 2 * LABEL_PAD);
+  rect.setAttribute("rx", LABEL_PAD);
+  text.before(rect);
 }
 
 function renderActive() {
@@ -158,13 +176,21 @@ document.getElementById("smach-zoom").addEventListener("click", (ev) => {
   ev.currentTarget.setAttribute("aria-pressed", String(fit));
 });
 
-// At its own size the graph scrolls; keep the current state in view when it moves.
+// At its own size the graph scrolls; keep the current state in view when it moves, with the
+// labels of its transitions when they fit beside it (on a phone they often do not).
 function showCurrent() {
   const el = box.querySelector("g.node.current");
   if (!el || box.classList.contains("fit")) return;
-  const a = el.getBoundingClientRect(), b = box.getBoundingClientRect();
+  const b = box.getBoundingClientRect();
+  let a = el.getBoundingClientRect();
+  const labels = [...box.querySelectorAll("g.edge.available .label-hit")].map((r) => r.getBoundingClientRect());
+  const all = [a, ...labels].reduce((u, r) => ({
+    left: Math.min(u.left, r.left), right: Math.max(u.right, r.right),
+    top: Math.min(u.top, r.top), bottom: Math.max(u.bottom, r.bottom),
+  }));
+  if (all.right - all.left <= b.width && all.bottom - all.top <= b.height) a = all;
   if (a.left < b.left || a.right > b.right || a.top < b.top || a.bottom > b.bottom) {
-    box.scrollBy({ left: a.left + a.width / 2 - (b.left + b.width / 2), top: a.top + a.height / 2 - (b.top + b.height / 2) });
+    box.scrollBy({ left: (a.left + a.right - b.left - b.right) / 2, top: (a.top + a.bottom - b.top - b.bottom) / 2 });
   }
 }
 

@@ -10,7 +10,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.browser.support import login
+from tests.browser.support import PHONE, fresh_page, login
 
 pytestmark = pytest.mark.browser
 
@@ -26,6 +26,21 @@ def _edge(page, source: str, event: str):
     return page.locator(f'#smach-graph g.edge[data-from="{source}"][data-event="{event}"]')
 
 
+# Each edge's label box: what a finger hits (the padded target when there is one, else the text).
+LABEL_BOXES = """() => [...document.querySelectorAll('#smach-graph g.edge')].flatMap((edge) => {
+    const target = edge.querySelector('.label-hit') || edge.querySelector('text');
+    if (!target) return [];
+    const r = target.getBoundingClientRect();
+    return [{id: edge.id, event: edge.dataset.event, left: r.left, right: r.right, top: r.top, bottom: r.bottom,
+             clickable: edge.classList.contains('clickable')}];
+})"""
+
+
+def _overlapping(boxes: list[dict]) -> list[tuple[str, str]]:
+    return [(a["id"], b["id"]) for i, a in enumerate(boxes) for b in boxes[i + 1:]
+            if a["left"] < b["right"] and b["left"] < a["right"] and a["top"] < b["bottom"] and b["top"] < a["bottom"]]
+
+
 def test_clicking_a_transition_in_the_graph_sends_its_event_and_the_graph_follows(page, stack):
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -33,6 +48,7 @@ def test_clicking_a_transition_in_the_graph_sends_its_event_and_the_graph_follow
     # A fresh simulator spends its start-up (15 s) in startup before suspension.
     expect(page.locator(CURRENT)).to_have_attribute("data-path", "/SM_ROOT/suspension", timeout=40_000)
     expect(page.locator("#smach-graph g.cluster")).to_have_count(2)  # behaviour, and navigation inside it
+    assert _overlapping(page.evaluate(LABEL_BOXES)) == []
     edge = _edge(page, "/SM_ROOT/suspension", "manual_start")
     expect(edge).to_have_class("edge available clickable")
     try:
@@ -50,6 +66,32 @@ def test_clicking_a_transition_in_the_graph_sends_its_event_and_the_graph_follow
         if page.locator(CURRENT).get_attribute("data-path") != "/SM_ROOT/suspension":
             _post(page, stack, "/api/robot/mode/", {"mode": "stop"})
     assert errors == []
+
+
+def test_on_a_phone_the_graph_labels_stand_apart_and_a_tap_on_one_sends_its_event(browser, stack):
+    with fresh_page(browser, viewport=PHONE, is_mobile=True, has_touch=True) as page:
+        login(page, stack, "otto", next_path="/statemachine/")
+        expect(page.locator(CURRENT)).to_have_attribute("data-path", "/SM_ROOT/suspension", timeout=40_000)
+        edge = _edge(page, "/SM_ROOT/suspension", "manual_start")
+        expect(edge).to_have_class("edge available clickable")
+        boxes = page.evaluate(LABEL_BOXES)
+        assert len(boxes) > 40  # every outcome edge of the simulator's machine is labelled
+        assert _overlapping(boxes) == []
+        targets = [b for b in boxes if b["clickable"]]
+        assert targets and all(min(b["right"] - b["left"], b["bottom"] - b["top"]) >= 24 for b in targets), targets
+        try:
+            edge.locator("text").tap()
+            expect(page.locator(CURRENT)).to_have_attribute("data-path", "/SM_ROOT/manual", timeout=10_000)
+            back = _edge(page, "/SM_ROOT/manual", "aborted")
+            expect(back).to_have_class("edge available clickable")
+            # A tap just above the word, inside its target, counts too.
+            back.locator("text").scroll_into_view_if_needed()
+            text = back.locator("text").bounding_box()
+            page.touchscreen.tap(text["x"] + text["width"] / 2, text["y"] - 3)
+            expect(page.locator(CURRENT)).to_have_attribute("data-path", "/SM_ROOT/suspension", timeout=10_000)
+        finally:
+            if page.locator(CURRENT).get_attribute("data-path") != "/SM_ROOT/suspension":
+                _post(page, stack, "/api/robot/mode/", {"mode": "stop"})
 
 
 def test_a_viewer_sees_the_graph_but_cannot_send_events(page, stack):
