@@ -21,14 +21,14 @@ function row(c) {
   const tr = document.createElement("tr");
   tr.dataset.component = c.name;
   tr.dataset.level = c.level_name;
-  const name = cell(c.name);
+  const name = cell(c.name, "name-cell");
   if (c.hardware_id) {
     const hw = document.createElement("span");
     hw.className = "hw";
     hw.textContent = c.hardware_id;
     name.append(hw);
   }
-  const level = cell();
+  const level = cell(undefined, "level-cell");
   const pill = document.createElement("span");
   pill.className = `level level-${LEVEL_CLASS[c.level] ?? "stale"}`;
   pill.textContent = c.level_name;
@@ -44,7 +44,7 @@ function row(c) {
     }
     values.append(dl);
   }
-  tr.append(name, level, cell(c.message), values, cell("", "age-cell"));
+  tr.append(name, level, cell(c.message, "message-cell"), values, cell("", "age-cell"));
   return tr;
 }
 
