@@ -1,6 +1,7 @@
 // The live websocket, one per page: pages import `live` and subscribe to the topic keys they
-// show. It reconnects with backoff, re-watches everything after a reconnect, hands a late
-// subscriber the latest frame of a key already watched, and reports the link status.
+// show. It reconnects with backoff, re-watches everything after a reconnect (but a topic the
+// server refused), hands a late subscriber the latest frame of a key already watched, and
+// reports the link status.
 //
 //   import { live } from "./live.js";
 //   const stop = live.watch(["battery_soc"], (frame) => …);   // frame = {key, msg, t}
@@ -8,7 +9,7 @@
 //   live.onStatus((status) => …);                // {connected, link_running, since, url, …} or {server_down}
 //   live.onOpen(() => …);                        // after every (re)connect
 //   live.send({action: "reconnect"});
-//   const close = live.watchTopic("/rosout", (frame) => …);   // any topic of the robot's, by name
+//   const close = live.watchTopic("/rosout", (frame) => …, {onRefused: (error) => …});   // any topic, by name
 import { site, socketURL, toLogin } from "./config.js";
 import { notify } from "./notices.js";
 
@@ -24,16 +25,24 @@ class Live {
   #statusHandlers = new Set();
   #openHandlers = new Set();
   #topics = new Map(); // topic name -> Set(handler) (the topics page: frames under "topic:<name>")
+  #refusals = new Map(); // topic name -> Set(onRefused)
+  #refused = new Map(); // topic name -> the server's refusal: not asked for again while it is watched
   status = null;
 
   // Any topic of the robot's by name (summarised by the server); returns a function that closes it.
-  watchTopic(name, handler) {
+  // onRefused(error) runs when the server refuses it (no such topic, a bad name); a refused topic
+  // is not asked for again after a reconnect. A robot offline is no refusal: the watch stands.
+  watchTopic(name, handler, { onRefused = null } = {}) {
     const key = `topic:${name}`;
     if (!this.#topics.has(name)) {
       this.#topics.set(name, new Set());
+      this.#refusals.set(name, new Set());
       this.send({ action: "watch_topic", topic: name });
     }
     this.#topics.get(name).add(handler);
+    if (onRefused) this.#refusals.get(name).add(onRefused);
+    const refusal = this.#refused.get(name);
+    if (refusal && onRefused) queueMicrotask(() => onRefused(refusal));
     if (!this.#handlers.has(key)) this.#handlers.set(key, new Set());
     this.#handlers.get(key).add(handler);
     const last = this.#latest.get(key);
@@ -43,8 +52,11 @@ class Live {
       const set = this.#topics.get(name);
       set?.delete(handler);
       this.#handlers.get(key)?.delete(handler);
+      if (onRefused) this.#refusals.get(name)?.delete(onRefused);
       if (set && !set.size) {
         this.#topics.delete(name);
+        this.#refusals.delete(name);
+        this.#refused.delete(name);
         this.#handlers.delete(key);
         this.#latest.delete(key);
         this.send({ action: "unwatch_topic", topic: name });
@@ -98,6 +110,13 @@ class Live {
     this.#open();
   }
 
+  #refuse(error) {
+    this.#refused.set(error.topic, error);
+    for (const fn of this.#refusals.get(error.topic) ?? []) {
+      try { fn(error); } catch (e) { console.error("topic refused", error.topic, e); }
+    }
+  }
+
   #setStatus(status) {
     this.status = status;
     for (const fn of this.#statusHandlers) fn(status);
@@ -111,7 +130,9 @@ class Live {
       document.body.classList.remove("socket-down");
       const keys = [...this.#handlers.keys()].filter((k) => !k.startsWith("topic:"));
       if (keys.length) ws.send(JSON.stringify({ action: "watch", keys }));
-      for (const name of this.#topics.keys()) ws.send(JSON.stringify({ action: "watch_topic", topic: name }));
+      for (const name of this.#topics.keys()) {
+        if (!this.#refused.has(name)) ws.send(JSON.stringify({ action: "watch_topic", topic: name }));
+      }
       while (this.#queue.length) ws.send(JSON.stringify(this.#queue.shift()));
       for (const fn of this.#openHandlers) fn();
     };
@@ -128,7 +149,10 @@ class Live {
           }
         }
       } else if (frame.kind === "status") this.#setStatus(frame);
-      else if (frame.kind === "error") notify(frame.message, "error");
+      else if (frame.kind === "error") {
+        if (frame.topic && frame.code !== "offline" && this.#topics.has(frame.topic)) this.#refuse(frame);
+        notify(frame.message, "error");
+      }
       else if (frame.kind === "notice") notify(frame.message, "info");
     };
     ws.onclose = (ev) => {

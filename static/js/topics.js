@@ -97,9 +97,10 @@ function openTopic(name, type = "") {
   clearPlot();
   openPaths.clear();
   openPaths.add("[]");
-  current = { name, type, close: live.watchTopic(name, onFrame) };
+  current = { name, type, close: live.watchTopic(name, onFrame, { onRefused: (error) => onRefused(name, error) }) };
   $("topic-name").textContent = name;
   $("topic-meta").textContent = `${type || "type unknown"} · waiting for a message…`;
+  $("topic-meta").classList.remove("topic-refused");
   $("topic-message").replaceChildren();
   for (const id of ["topic-pause", "topic-copy"]) $(id).disabled = false;
   $("topic-record").disabled = $("topic-record").dataset.canRecord !== "1";
@@ -112,6 +113,13 @@ function onFrame(frame) {
   latest = frame;
   if (fields.length) addPoint(frame);
   if (!paused) scheduleRender();
+}
+
+// Shown in the card for as long as the topic is open (the toast says it too, for a while).
+function onRefused(name, error) {
+  if (current?.name !== name) return;
+  $("topic-meta").textContent = `Cannot watch ${name}: ${error.message}`;
+  $("topic-meta").classList.add("topic-refused");
 }
 
 function scheduleRender() {

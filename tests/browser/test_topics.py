@@ -1,6 +1,10 @@
-"""The Topics page in a real browser: it lists /rosout, shows its messages live, and plots a field."""
+"""The Topics page in a real browser: it lists /rosout, shows its messages live, plots a field,
+watches again after its websocket reconnects, and redraws a fast topic at a readable rate."""
 
 from __future__ import annotations
+
+import json
+import re
 
 import pytest
 from playwright.sync_api import expect
@@ -55,3 +59,63 @@ def test_clicking_a_number_plots_it_live(stack, page):
     expect(page.locator("#topic-plot canvas").first).to_be_visible()
     expect(page.locator("#topic-plot-fields")).to_contain_text("header.stamp.secs")
     page.wait_for_function(f"({SERIES_PIXELS})() > 20", timeout=15_000)
+
+
+UNKNOWN = "/no_such_topic_here"
+
+
+class LiveSockets:
+    """The page's live websockets, each passed through to the real server and recorded: what the
+    page sent on each connection, and a way to drop the current one as a network failure would."""
+
+    def __init__(self, page) -> None:
+        self.connections: list[tuple[object, object, list[dict]]] = []
+        page.route_web_socket(re.compile(r"/ws/live/"), self._route)
+
+    def _route(self, ws) -> None:
+        server = ws.connect_to_server()
+        sent: list[dict] = []
+
+        def from_page(message) -> None:
+            sent.append(json.loads(message))
+            server.send(message)
+
+        ws.on_message(from_page)
+        self.connections.append((ws, server, sent))
+
+    def sent(self, index: int = -1) -> list[dict]:
+        return list(self.connections[index][2])
+
+    def drop(self, page) -> None:
+        before = len(self.connections)
+        ws, server, _ = self.connections[-1]
+        server.close()
+        ws.close(code=1006)
+        page.wait_for_function("() => !document.body.classList.contains('socket-down')", timeout=15_000)
+        assert len(self.connections) == before + 1
+
+
+def _topic_watches(sent: list[dict]) -> list[str]:
+    return [m["topic"] for m in sent if m.get("action") == "watch_topic"]
+
+
+def test_after_a_reconnect_it_watches_again_only_the_topics_the_server_accepted(stack, page):
+    sockets = LiveSockets(page)
+    login(page, stack, "vera", next_path=f"/topics/?topic={UNKNOWN}")
+    meta = page.locator("#topic-meta")
+    expect(meta).to_contain_text(f"Cannot watch {UNKNOWN}", timeout=15_000)
+    assert _topic_watches(sockets.sent()) == [UNKNOWN]
+    sockets.drop(page)
+    expect(meta).to_contain_text(f"Cannot watch {UNKNOWN}")  # the refusal stays on screen
+    # Opening another topic is sent after whatever the page sent on connecting: all of it is in.
+    page.locator(f"tr.topic-row[data-topic='{ROSOUT}'] .topic-open").click()
+    expect(meta).to_contain_text("received", timeout=20_000)
+    assert _topic_watches(sockets.sent()) == [ROSOUT]
+    first = meta.inner_text()
+    sockets.drop(page)
+    for _ in range(50):  # what the page sends on connecting reaches the recorder a moment later
+        if _topic_watches(sockets.sent()):
+            break
+        page.wait_for_timeout(100)
+    assert _topic_watches(sockets.sent()) == [ROSOUT]
+    expect(meta).not_to_have_text(first, timeout=30_000)  # and its messages come again
