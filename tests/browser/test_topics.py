@@ -16,6 +16,7 @@ pytestmark = pytest.mark.browser
 
 ROSOUT = ri.topic("rosout").name
 ODOM = ri.topic("odom").name
+TF = ri.topic("tf").name  # 25 Hz from the simulator, sent to pages at up to 20 Hz
 # Pixels of the first plotted series' colour (#1f6feb) on the plot's canvas.
 SERIES_PIXELS = """() => {
     const canvas = document.querySelector('#topic-plot canvas');
@@ -119,3 +120,35 @@ def test_after_a_reconnect_it_watches_again_only_the_topics_the_server_accepted(
         page.wait_for_timeout(100)
     assert _topic_watches(sockets.sent()) == [ROSOUT]
     expect(meta).not_to_have_text(first, timeout=30_000)  # and its messages come again
+
+
+# Counts, from now on, the frames of one topic the page receives and the redraws of its message view.
+COUNT_REDRAWS = """(key) => {
+    window.redraws = 0;
+    window.framesIn = 0;
+    new MutationObserver((records) => { window.redraws += records.length; })
+        .observe(document.getElementById('topic-message'), {childList: true});
+    window.countFrames = (data) => { if (data.includes(JSON.stringify(key))) window.framesIn++; };
+}"""
+# Installed before the page's scripts: every websocket message goes past window.countFrames.
+TAP_SOCKETS = """(() => {
+    const Original = window.WebSocket;
+    window.WebSocket = class extends Original {
+        constructor(...args) {
+            super(...args);
+            this.addEventListener('message', (ev) => window.countFrames?.(String(ev.data)));
+        }
+    };
+})()"""
+
+
+def test_a_fast_topic_is_redrawn_a_few_times_a_second(stack, page):
+    page.add_init_script(TAP_SOCKETS)
+    login(page, stack, "vera", next_path=f"/topics/?topic={TF}")
+    expect(page.locator("#topic-meta")).to_contain_text("received", timeout=20_000)
+    page.evaluate(COUNT_REDRAWS, f"topic:{TF}")
+    window_s = 3
+    page.wait_for_timeout(window_s * 1000)
+    redraws, frames = page.evaluate("[window.redraws, window.framesIn]")
+    assert frames >= 3 * window_s * 4, frames  # it comes far faster than a person reads
+    assert window_s <= redraws <= window_s * 5, (redraws, frames)  # yet is redrawn at most about 4 times a second
