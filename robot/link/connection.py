@@ -22,6 +22,7 @@ from robot import interface as ri
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos
+from robot.live import trace
 from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.fanout import Coalescer
 from robot.live.groups import (
@@ -276,6 +277,8 @@ class RobotLink:
             if asyncio.iscoroutine(result):
                 self._spawn(result)
             return
+        if trace.enabled:
+            trace.begin(topic.key, t, msg)
         update: TopicUpdate = {
             "type": "robot.update", "key": topic.key, "topic": name, "msg_type": msg_type, "msg": msg, "t": t,
         }
@@ -284,6 +287,8 @@ class RobotLink:
 
     async def _send_update(self, update: TopicUpdate) -> None:
         key = update["key"]
+        if trace.enabled:
+            trace.mark(update["t"], "drain")
         await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store)
 
     # --- connection status -----------------------------------------------------------

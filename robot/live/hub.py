@@ -32,6 +32,7 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any, Protocol
 
+from robot.live import trace
 from robot.live.frames import batch_frame, ws_text_frame
 
 log = logging.getLogger(__name__)
@@ -108,6 +109,7 @@ class Hub:
         self._tokens_at = time.monotonic()
         self._flushing: asyncio.Task | None = None
         self._thread = threading.get_ident()
+        self._traced: list[float] = []  # receive times of traced updates not yet written (robot.live.trace)
 
     # --- sockets ---------------------------------------------------------------------
 
@@ -157,6 +159,9 @@ class Hub:
         watchers = self._watchers.get(key)
         if not watchers:
             return
+        if trace.enabled and key == trace.KEY:
+            trace.mark(t, "hub")
+            self._traced.append(t)
         for socket in watchers:
             socket.offer(key, fragment, t, every)
         self._dirty.update(watchers)
@@ -200,11 +205,16 @@ class Hub:
             self._schedule()  # the previous writes are still running: next tick
             return
         self._refill(time.monotonic())
+        traced = self._traced
+        if traced:
+            self._traced = []
+            for t in traced:
+                trace.mark(t, "flush")
         dirty = self._dirty
         later: list[Socket] = []
         via_send: list[Socket] = []
         encoded: dict[Any, bytes] = {}  # one encoded frame per distinct content, shared by every socket
-        wrote = False
+        written = 0
         for socket in dirty:
             writer = socket.writer
             if writer is None:
@@ -232,13 +242,15 @@ class Hub:
                     frame = encoded[content] = ws_text_frame(batch_frame(content))
                 socket.pending.clear()
                 writer.write(frame)
-            wrote = True
+            written += 1
         dirty.clear()
-        if wrote or via_send:
+        for t in traced:
+            trace.finish(t, written)
+        if written or via_send:
             self._tokens -= 1.0  # polling slow sockets alone costs no frame
         if later:
             dirty.update(later)
-            self._schedule(at_least=0.0 if wrote or via_send else self.tick_s)  # stuck sockets: poll per tick
+            self._schedule(at_least=0.0 if written or via_send else self.tick_s)  # stuck sockets: poll per tick
         if via_send:
             self._flushing = self.loop.create_task(self._write(via_send))
 
