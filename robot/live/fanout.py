@@ -19,8 +19,12 @@ log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
 
-# A topic whose messages arrive at most this much of a period early counts as published at
-# its UI rate and passes straight through.
+# A coalesced topic's message goes at once when it is the first of its period: it arrived at least
+# 1 - JITTER_SLACK of a period after the previous one (a topic published at its UI rate, give or
+# take jitter), or a token is left in a bucket of BURST refilled at the UI rate (the early one of
+# two bunched together by a late one). Otherwise it waits, latest value wins, for the next token:
+# a topic published faster than its UI rate reaches browsers at that rate.
+BURST = 2.0
 JITTER_SLACK = 0.2
 
 
@@ -30,7 +34,7 @@ class Coalescer:
         self._loop = loop
         self._max_backlog = max_backlog
         self._outbox: OrderedDict[Any, Any] = OrderedDict()
-        self._last_sent: dict[str, float] = {}
+        self._buckets: dict[str, tuple[float, float]] = {}  # key -> (tokens, when counted)
         self._last_arrival: dict[str, float] = {}
         self._waiting: dict[str, Any] = {}  # key -> latest value held back by the rate limit
         self._timers: dict[str, asyncio.TimerHandle] = {}
@@ -51,27 +55,30 @@ class Coalescer:
             self._waiting[key] = value
             return
         gap = 1.0 / rate_hz
-        # Judge an on-rate topic by its arrival gaps, not by the last release: holding a message
-        # that is early only by jitter would push every later release back by as much, so one
-        # late message would make the topic lag (up to a period) for as long as it runs.
-        if previous is not None and now - previous >= gap * (1.0 - JITTER_SLACK):
-            wait = 0.0
-        else:
-            wait = self._last_sent.get(key, 0.0) + gap - now
-        if wait <= 0:
+        tokens = self._tokens(key, gap)
+        if tokens >= 1.0 or (previous is not None and now - previous >= gap * (1.0 - JITTER_SLACK)):
             self._release(key, value)
         else:
             self._waiting[key] = value
-            self._timers[key] = self._loop.call_later(wait, self._on_timer, key)
+            self._timers[key] = self._loop.call_later((1.0 - tokens) * gap, self._on_timer, key, gap)
 
-    def _on_timer(self, key: str) -> None:
+    def _tokens(self, key: str, gap: float) -> float:
+        now = time.monotonic()
+        tokens, at = self._buckets.get(key, (BURST, now))
+        tokens = min(BURST, tokens + (now - at) / gap)
+        self._buckets[key] = (tokens, now)
+        return tokens
+
+    def _on_timer(self, key: str, gap: float) -> None:
         self._timers.pop(key, None)
         value = self._waiting.pop(key, None)
         if value is not None:
+            self._tokens(key, gap)  # about one by now; a timer's lateness is no reason to wait again
             self._release(key, value)
 
     def _release(self, key: str, value: Any) -> None:
-        self._last_sent[key] = time.monotonic()
+        tokens, at = self._buckets[key]
+        self._buckets[key] = (max(0.0, tokens - 1.0), at)
         self._enqueue(key, value)
 
     def _enqueue(self, slot: Any, value: Any) -> None:
