@@ -50,13 +50,12 @@ class FrameWriter(Protocol):
 
 # Frames are paced by a token bucket: on average at most one frame per socket per TICK_S, with
 # bursts of up to BURST frames at once, so an update rarely waits for the pace (a 10 Hz pose right
-# after a 1 Hz battery reading goes out at once instead of a tick later). The first update after a
-# quiet spell waits GATHER_S so that messages the robot publishes together (pose, then odometry:
-# separate rosbridge frames a few hundred microseconds apart) share a frame; one that misses it
-# costs a frame, not a tick (bench/live_fanout.py).
+# after a 1 Hz reading goes out at once instead of a tick later). With a token in hand the flush
+# runs as soon as the loop has handled what it already read, without a timer: messages that
+# arrived in one read from rosbridge (the robot publishes pose and odometry together) share a
+# frame, and a lone fresh value goes out at once (bench/live_fanout.py).
 TICK_S = 0.02
 BURST = 3.0
-GATHER_S = 0.002
 # Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
 MAX_PENDING = 300
 _seq = itertools.count()
@@ -190,20 +189,22 @@ class Hub:
         self._tokens = min(BURST, self._tokens + (now - self._tokens_at) / self.tick_s)
         self._tokens_at = now
 
-    def _schedule(self, at_least: float = GATHER_S) -> None:
+    def _schedule(self, at_least: float = 0.0) -> None:
         if self._flush_at is not None:
             return
         now = time.monotonic()
         self._refill(now)
         wait = max(at_least, (1.0 - self._tokens) * self.tick_s)
         self._flush_at = now + wait
-        self.loop.call_at(self.loop.time() + wait, self._flush)
+        if wait > 0:
+            self.loop.call_at(self.loop.time() + wait, self._flush)
+        else:
+            self.loop.call_soon(self._flush)
 
     def _flush(self) -> None:
         self._flush_at = None
         if self._flushing is not None and not self._flushing.done():
-            self._schedule()  # the previous writes are still running: next tick
-            return
+            return  # the previous writes are still running; they schedule the next flush as they end
         self._refill(time.monotonic())
         traced = self._traced
         if traced:
@@ -270,6 +271,8 @@ class Hub:
                 log.debug("live socket write failed", exc_info=True)
             finally:
                 socket.sending = False
+        if self._dirty:
+            self._schedule()
 
 
 _hubs: dict[asyncio.AbstractEventLoop, Hub] = {}

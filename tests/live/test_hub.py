@@ -237,3 +237,27 @@ async def test_a_flood_of_updates_is_paced_to_about_one_frame_per_tick():
     # only makes fewer frames); the newest value always arrives.
     assert len(writer.frames) <= BURST + elapsed / 0.05 + 2
     assert i > len(writer.frames)
+
+
+async def test_a_lone_update_is_written_in_the_next_loop_turn_without_waiting_for_a_timer():
+    hub = Hub(asyncio.get_running_loop(), tick_s=10.0)  # any wait for a tick or a timer would show
+    writer = FakeWriter()
+    hub.watch(hub.attach(Recorder().send, writer), ["odom"])
+    hub.publish("odom", fragment("odom", 1, 1), 1)
+    assert not writer.frames  # not inside publish: what the loop read in the same turn may join it
+    await asyncio.sleep(0)
+    await asyncio.sleep(0)
+    assert [u["msg"]["data"] for u in writer.updates()] == [1]
+
+
+async def test_updates_offered_in_one_loop_turn_share_one_frame():
+    hub = Hub(asyncio.get_running_loop())
+    writer = FakeWriter()
+    hub.watch(hub.attach(Recorder().send, writer), ["odom", "robot_pose", "battery_soc"])
+    hub.publish("robot_pose", fragment("robot_pose", 1, 1), 1)
+    hub.publish("odom", fragment("odom", 2, 2), 2)
+    hub.publish("odom", fragment("odom", 3, 3), 3)
+    await async_wait_until(lambda: writer.frames, timeout=2)
+    await asyncio.sleep(0.05)
+    assert len(writer.frames) == 1
+    assert [(u["key"], u["msg"]["data"]) for u in writer.updates()] == [("robot_pose", 1), ("odom", 3)]
