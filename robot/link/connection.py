@@ -1,9 +1,9 @@
 """The robot link: the one rosbridge connection per robot.
 
 roslibpy's Twisted transport delivers callbacks on the reactor thread. Inside Daphne that
-is the asyncio loop's own thread; in ``manage.py robotlink`` and in tests it is a thread of
-its own. Either way every callback hops onto the asyncio loop with ``call_soon_threadsafe``
-and nothing in a callback blocks.
+is the asyncio loop's own thread, and a topic message is handled right there, in the read that
+brought it; in ``manage.py robotlink`` and in tests the reactor is a thread of its own and every
+callback hops onto the asyncio loop with ``call_soon_threadsafe``. Nothing in a callback blocks.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import re
+import threading
 import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING, Any, cast
@@ -131,6 +132,7 @@ class RobotLink:
         self.attempts = 0
         self.ros: roslibpy.Ros | None = None
         self.loop: asyncio.AbstractEventLoop | None = None
+        self._loop_thread: int | None = None
         self._subscriptions: dict[str, roslibpy.Topic] = {}
         # Who holds each upstream subscription (the registry, the recorder, watching pages, ...):
         # the subscription goes when its last holder lets go.
@@ -154,6 +156,7 @@ class RobotLink:
         from twisted.internet import reactor
 
         self.loop = asyncio.get_running_loop()
+        self._loop_thread = threading.get_ident()
         self.connecting_until = time.time() + FIRST_CONNECT_S
         self._coalescer = Coalescer(self._send_update, loop=self.loop)
         self.guard = CmdVelGuard(self._publish_zero, loop=self.loop, **self._guard_settings)
@@ -224,6 +227,18 @@ class RobotLink:
         if loop is not None and not loop.is_closed():
             loop.call_soon_threadsafe(fn, *args)
 
+    def _received(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
+        """A topic message, on the reactor thread: handled at once when that is the loop's own
+        thread (Daphne), not a self-pipe wake-up and a loop turn later."""
+        t = time.time()
+        if threading.get_ident() != self._loop_thread:
+            self._threadsafe(self._on_message, name, msg_type, msg, t)
+            return
+        try:
+            self._on_message(name, msg_type, msg, t)
+        except Exception:  # never into roslibpy's read: the connection must survive a bad message
+            log.exception("handling a message on %s failed", name)
+
     # --- subscriptions ---------------------------------------------------------------
 
     def subscribe(self, name: str, msg_type: str, *, holder: str = PINNED_HOLDER) -> None:
@@ -235,7 +250,7 @@ class RobotLink:
         if name in self._subscriptions:
             return
         topic = roslibpy.Topic(self.ros, name, msg_type)
-        topic.subscribe(lambda msg, _n=name, _t=msg_type: self._threadsafe(self._on_message, _n, _t, msg, time.time()))
+        topic.subscribe(lambda msg, _n=name, _t=msg_type: self._received(_n, _t, msg))
         self._subscriptions[name] = topic
 
     def unsubscribe(self, name: str, *, holder: str = PINNED_HOLDER) -> None:

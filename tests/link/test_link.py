@@ -1,6 +1,7 @@
 """The robot link against the simulator: real websocket, unmodified roslibpy."""
 
 import asyncio
+import threading
 
 import pytest
 
@@ -170,3 +171,28 @@ async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_e
     link.reconnect()
     await async_wait_until(lambda: link.since > before and "/lidar/points" in link.failed_subscriptions,
                            timeout=15, what="the subscription tried (and refused) again after the reconnect")
+
+
+async def test_a_message_read_on_the_loops_own_thread_is_handled_in_that_read(link, monkeypatch, caplog):
+    # Inside Daphne the reactor is the event loop's thread: no hop through call_soon_threadsafe.
+    seen = []
+    link.listeners.append(lambda name, msg_type, msg, t: seen.append((name, threading.get_ident())))
+    link._received("/not_in_the_registry", "std_msgs/String", {"data": "x"})
+    assert ("/not_in_the_registry", threading.get_ident()) in seen
+
+    def broken(topic, msg, t):
+        raise ValueError("bad message")
+
+    monkeypatch.setitem(link_module._handlers, BATTERY, broken)
+    link._received(ri.topic(BATTERY).name, ri.topic(BATTERY).type, {"data": 0.5})  # logged, never raised
+    assert "handling a message on /" in caplog.text
+
+
+async def test_a_message_read_on_another_thread_is_handled_on_the_loop(link):
+    seen = []
+    link.listeners.append(lambda name, msg_type, msg, t: seen.append((name, threading.get_ident())))
+    reader = threading.Thread(target=link._received, args=("/not_in_the_registry", "std_msgs/String", {}))
+    reader.start()
+    reader.join()
+    await async_wait_until(lambda: ("/not_in_the_registry", threading.get_ident()) in seen, timeout=2)
+    assert [ident for name, ident in seen if name == "/not_in_the_registry"] == [threading.get_ident()]
