@@ -18,7 +18,7 @@ from django.conf import settings
 from robot import interface as ri
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
-from robot.live.hub import Hub, get_hub, hubs
+from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
 from robot.live.state import redis_key
 
 log = logging.getLogger(__name__)
@@ -75,6 +75,7 @@ def local_hub() -> Hub:
     """This process's hub; scaled, also its one Redis subscription (started on first use)."""
     hub = get_hub()
     if settings.REDIS_URL:
+        hub.gather_s = REDIS_GATHER_S
         task = _subscribers.get(hub)
         if task is None or task.done():
             _subscribers[hub] = hub.loop.create_task(run_subscriber(hub))

@@ -53,9 +53,12 @@ class FrameWriter(Protocol):
 # after a 1 Hz reading goes out at once instead of a tick later). With a token in hand the flush
 # runs as soon as the loop has handled what it already read, without a timer: messages that
 # arrived in one read from rosbridge (the robot publishes pose and odometry together) share a
-# frame, and a lone fresh value goes out at once (bench/live_fanout.py).
+# frame, and a lone fresh value goes out at once (bench/live_fanout.py). Fed from Redis (scaled),
+# updates the link published together arrive as separate messages a Redis round trip or two
+# apart: that hub waits REDIS_GATHER_S so they still share a frame.
 TICK_S = 0.02
 BURST = 3.0
+REDIS_GATHER_S = 0.002
 # Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
 MAX_PENDING = 300
 _seq = itertools.count()
@@ -97,9 +100,10 @@ class Socket:
 
 
 class Hub:
-    def __init__(self, loop: asyncio.AbstractEventLoop, *, tick_s: float = TICK_S) -> None:
+    def __init__(self, loop: asyncio.AbstractEventLoop, *, tick_s: float = TICK_S, gather_s: float = 0.0) -> None:
         self.loop = loop
         self.tick_s = tick_s
+        self.gather_s = gather_s  # how long a fresh update waits for others (scaled: REDIS_GATHER_S)
         self.sockets: set[Socket] = set()
         self._watchers: dict[str, set[Socket]] = {}
         self._dirty: set[Socket] = set()
@@ -189,12 +193,12 @@ class Hub:
         self._tokens = min(BURST, self._tokens + (now - self._tokens_at) / self.tick_s)
         self._tokens_at = now
 
-    def _schedule(self, at_least: float = 0.0) -> None:
+    def _schedule(self, at_least: float | None = None) -> None:
         if self._flush_at is not None:
             return
         now = time.monotonic()
         self._refill(now)
-        wait = max(at_least, (1.0 - self._tokens) * self.tick_s)
+        wait = max(self.gather_s if at_least is None else at_least, (1.0 - self._tokens) * self.tick_s)
         self._flush_at = now + wait
         if wait > 0:
             self.loop.call_at(self.loop.time() + wait, self._flush)
