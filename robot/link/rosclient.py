@@ -85,12 +85,27 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
             log.exception("handling a %r frame failed", message.get("op"))
 
 
+_twisted_log_observer: Any = None
+
+
+def _keep_one_twisted_log_observer(manager: Any) -> None:
+    """roslibpy starts a Twisted-to-logging observer for every connection and never stops it, so
+    after N connections (a link that restarts, a test suite) every Twisted line is logged N times."""
+    global _twisted_log_observer
+    observer = manager._log_observer
+    if _twisted_log_observer is None:
+        _twisted_log_observer = observer
+    elif observer is not _twisted_log_observer:
+        observer.stop()
+
+
 class LinkRos(roslibpy.Ros):
     """``roslibpy.Ros`` whose connections use ``LinkProtocol``; ``array_topics`` get numpy arrays."""
 
     def __init__(self, url: str, *, array_topics: frozenset[str] = frozenset()) -> None:
         self._array_topics = array_topics
         super().__init__(url, transport="twisted")
+        _keep_one_twisted_log_observer(self.factory.manager)
 
     def connect(self) -> None:
         # Ros.__init__ connects at once: set the protocol before the first connection is built.
