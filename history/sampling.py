@@ -22,6 +22,7 @@ from django.db import transaction
 from history.models import Mode, TopicPolicy
 from history.policies import load_policies
 from history.storage import FailureLog, Pending, encode, in_thread, write_rows
+from robot.supervisor import stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -92,6 +93,8 @@ async def run_schedule(link: Any) -> None:
                 next_prune = started + settings.HISTORY_PRUNE_EVERY_S
                 await in_thread(prune_expired)
             failures.ok()
-        except Exception:
+        except Exception as exc:
+            if stop_requested():
+                raise asyncio.CancelledError from exc
             failures.failed()
         await asyncio.sleep(max(0.05, settings.HISTORY_SAMPLE_TICK_S - (time.monotonic() - started)))

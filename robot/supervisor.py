@@ -35,6 +35,14 @@ class TaskHealth:
 _tasks: dict[str, TaskHealth] = {}
 
 
+def stop_requested() -> bool:
+    """True once the running task has been cancelled, even when a library (a Redis client in the
+    middle of a read) turned the CancelledError into an error of its own: a loop that catches
+    errors and carries on must stop then, or the task never ends and neither does its event loop."""
+    task = asyncio.current_task()
+    return task is not None and task.cancelling() > 0
+
+
 def supervise(
     name: str,
     factory: Callable[[], Awaitable[None]],
@@ -60,6 +68,9 @@ def supervise(
                     health.state = "finished"
                     raise
                 except Exception as exc:
+                    if stop_requested():
+                        health.state = "finished"
+                        raise asyncio.CancelledError from exc
                     if time.monotonic() - started >= STABLE_AFTER_S:
                         backoff = INITIAL_BACKOFF_S
                     health.state, health.restarts = "restarting", health.restarts + 1

@@ -18,6 +18,8 @@ import redis.asyncio
 from redis.asyncio.lock import Lock
 from redis.exceptions import LockError, LockNotOwnedError, RedisError
 
+from robot.supervisor import stop_requested
+
 log = logging.getLogger(__name__)
 
 
@@ -60,7 +62,9 @@ class Lease:
                     self.acquired_at = time.time()
                     log.info("robot link %s holds the lease", self.holder)
                     return
-            except RedisError:
+            except RedisError as exc:
+                if stop_requested():
+                    raise asyncio.CancelledError from exc
                 self._redis_failed()
             await asyncio.sleep(self.poll_s)
 
@@ -77,7 +81,9 @@ class Lease:
                 # Gone (expired, or Redis restarted empty) or taken. Take it back only if nobody has it.
                 if not await self._retake(started):
                     self._lose("another link holds it")
-            except RedisError:
+            except RedisError as exc:
+                if stop_requested():
+                    raise asyncio.CancelledError from exc
                 self._redis_failed()
                 if time.monotonic() >= self._valid_until:
                     self._lose(f"could not renew it within {self.ttl_s:g} s")

@@ -55,3 +55,21 @@ async def test_a_transient_task_leaves_health_when_it_ends():
 
     await supervisor.supervise("test.once", once, transient=True)
     assert "test.once" not in supervisor.health()
+
+
+async def test_a_cancel_that_a_library_turns_into_its_own_error_still_stops_the_task():
+    started = asyncio.Event()
+
+    async def reads_from_redis():
+        started.set()
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError as exc:  # as a client library may do mid-read
+            raise ConnectionError("connection closed while reading") from exc
+
+    task = supervisor.supervise("test.swallowed-cancel", reads_from_redis)
+    await started.wait()
+    task.cancel()
+    done, _ = await asyncio.wait({task}, timeout=3)
+    assert task in done and task.cancelled()
+    assert supervisor.health()["test.swallowed-cancel"]["state"] == "finished"
