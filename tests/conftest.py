@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import io
 import threading
 
 import pytest
@@ -14,6 +15,35 @@ from tests.browser.support import browser, page, sized_page, stack  # noqa: F401
 from tests.helpers import async_wait_until, wait_until
 
 PASSWORD = "correct-horse-battery"
+
+
+TASK_STOP_S = 15.0
+
+
+def _cancel_all_tasks_naming_stragglers(loop: asyncio.AbstractEventLoop) -> None:
+    """``asyncio.Runner``'s clean-up at the end of each async test, bounded: a task that ignores its
+    cancellation would otherwise hang the run until the test's timeout without naming itself."""
+    tasks = [task for task in asyncio.all_tasks(loop) if not task.done()]
+    if not tasks:
+        return
+    for task in tasks:
+        task.cancel()
+    done, pending = loop.run_until_complete(asyncio.wait(tasks, timeout=TASK_STOP_S))
+    for task in done:
+        if not task.cancelled() and task.exception() is not None:
+            loop.call_exception_handler({"message": "unhandled exception during asyncio.run() shutdown",
+                                         "exception": task.exception(), "task": task})
+    if pending:
+        stacks = []
+        for task in pending:
+            out = io.StringIO()
+            task.print_stack(file=out)
+            stacks.append(out.getvalue())
+        raise RuntimeError(f"{len(pending)} task(s) still running {TASK_STOP_S:g} s after being cancelled:\n"
+                           + "\n".join(stacks))
+
+
+asyncio.runners._cancel_all_tasks = _cancel_all_tasks_naming_stragglers  # type: ignore[attr-defined]
 
 
 def pytest_collection_modifyitems(config, items):
