@@ -13,7 +13,7 @@ from dashboard.fastdispatch import NoDatabaseHopMixin
 from robot import interface as ri
 from robot.link.bus import RobotError, arequest
 from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
-from robot.live.feed import keeps_every_message, local_hub
+from robot.live.feed import alocal_hub, keeps_every_message
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
@@ -36,9 +36,9 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             await self.close(code=UNAUTHENTICATED)
             return
         await self.accept()
+        self.hub = await alocal_hub()
         status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
         await self.send(text_data=status_text(status))
-        self.hub = local_hub()
         # Under Daphne: frames written straight to the connection (cyborg_site.direct_frames).
         writer = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.socket = self.hub.attach(self._send_text, writer)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import os
 import weakref
 from typing import Any
 
@@ -19,13 +20,17 @@ from robot import interface as ri
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
-from robot.live.state import redis_key
+from robot.live.state import get_store, redis_key
+from robot.supervisor import stop_requested
 
 log = logging.getLogger(__name__)
 
 RETRY_S = 1.0
+SUBSCRIBE_WAIT_S = 3.0
+SUBSCRIBER_NAME = f"cyborg-live-{os.getpid()}"  # in Redis's CLIENT LIST
 _clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
 _subscribers: weakref.WeakKeyDictionary[Hub, asyncio.Task] = weakref.WeakKeyDictionary()
+_ready: weakref.WeakKeyDictionary[Hub, asyncio.Event] = weakref.WeakKeyDictionary()
 
 
 def keeps_every_message(key: str) -> bool:
@@ -71,14 +76,23 @@ async def announce_status(status: dict[str, Any]) -> None:
         hub.publish_status(text)
 
 
-def local_hub() -> Hub:
-    """This process's hub; scaled, also its one Redis subscription (started on first use)."""
+async def alocal_hub() -> Hub:
+    """This process's hub. Scaled, once its one Redis subscription is in place (started on first use):
+    pub/sub keeps nothing for a late subscriber, so a page whose first snapshot was read before the
+    subscription began could miss an update published in between (a latched topic's only message)."""
     hub = get_hub()
     if settings.REDIS_URL:
         hub.gather_s = REDIS_GATHER_S
         task = _subscribers.get(hub)
         if task is None or task.done():
+            _ready[hub] = asyncio.Event()
             _subscribers[hub] = hub.loop.create_task(run_subscriber(hub))
+        try:
+            async with asyncio.timeout(SUBSCRIBE_WAIT_S):
+                await _ready[hub].wait()
+        except TimeoutError:
+            log.warning("live updates: no Redis subscription after %g s; the page gets updates once it is back",
+                        SUBSCRIBE_WAIT_S)
     return hub
 
 
@@ -93,25 +107,45 @@ def deliver(hub: Hub, data: bytes | str) -> None:
 
 
 async def run_subscriber(hub: Hub) -> None:
-    """Feed ``hub`` from the Redis channel for as long as the process runs; resubscribe after errors."""
+    """Feed ``hub`` from the Redis channel for as long as the process runs; resubscribe after errors.
+    Each time the subscription is (again) in place, the sockets get the stored value of every key
+    they watch: whatever was published while there was no subscription is not lost."""
     import redis.asyncio
 
     while True:
-        client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+        client = redis.asyncio.Redis.from_url(settings.REDIS_URL, client_name=SUBSCRIBER_NAME)
         try:
-            async with client.pubsub(ignore_subscribe_messages=True) as pubsub:
+            async with client.pubsub() as pubsub:
                 await pubsub.subscribe(channel())
-                log.info("live updates: subscribed to %s", channel())
                 async for message in pubsub.listen():
-                    if message.get("type") == "message":
+                    kind = message.get("type")
+                    if kind == "message":
                         try:
                             deliver(hub, message["data"])
                         except ValueError:
                             log.warning("malformed live update on %s", channel())
-        except asyncio.CancelledError:
-            raise
-        except Exception:
+                    elif kind == "subscribe":
+                        log.info("live updates: subscribed to %s", channel())
+                        await _refresh(hub)
+                        _ready.setdefault(hub, asyncio.Event()).set()
+        except Exception as exc:
+            if stop_requested():
+                raise asyncio.CancelledError from exc
             log.warning("live update subscription lost; resubscribing in %g s", RETRY_S, exc_info=True)
             await asyncio.sleep(RETRY_S)
         finally:
             await client.aclose()
+
+
+async def _refresh(hub: Hub) -> None:
+    """Offer every watched key's stored value (latest-value keys: an event-like key's lines would repeat)."""
+    keys = [key for key in hub.watched_keys() if not keeps_every_message(key)]
+    if not keys:
+        return
+    try:
+        latest = await get_store().aget_many(keys)
+    except Exception:
+        log.warning("live updates: could not read the stored values after resubscribing", exc_info=True)
+        return
+    for key, entry in latest.items():
+        hub.publish(key, update_fragment(entry), float(entry["t"]))

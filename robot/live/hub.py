@@ -152,6 +152,9 @@ class Hub:
                 if not watchers:
                     del self._watchers[key]
 
+    def watched_keys(self) -> list[str]:
+        return list(self._watchers)
+
     # --- updates ---------------------------------------------------------------------
 
     def publish(self, key: str, fragment: str, t: float, *, every: bool = False) -> None:
