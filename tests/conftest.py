@@ -123,6 +123,16 @@ def _private_redis_prefix():
 
 
 @pytest.fixture(autouse=True)
+def _audit_writer_connection_closed():
+    """The audit writer keeps its connection between writes; a test ends with it closed, so the
+    next test's flush and the test database's drop meet no other session."""
+    yield
+    from robot.commands.audit_writer import writer
+
+    writer.close_connection()
+
+
+@pytest.fixture(autouse=True)
 def _fresh_layer_and_store(_private_redis_prefix):
     """Each test gets an empty channel layer and latest-state store."""
     from robot import interface

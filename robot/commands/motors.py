@@ -24,4 +24,5 @@ def set_motors(enabled: Any) -> Command:
             raise
         return f"Motors {'enabled' if on else 'disabled'} ({ri.service(key).name} ok)"
 
-    return Command("motors", {"enabled": enabled}, send, check=lambda: clean_bool(enabled, "enabled"))
+    return Command("motors", {"enabled": enabled}, send, check=lambda: clean_bool(enabled, "enabled"),
+                   check_on_loop=True)

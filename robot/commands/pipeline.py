@@ -12,11 +12,13 @@ to the robot, because every crossing queues behind whatever else that thread or 
   and the audit entry run in the caller's thread, where Django's ORM is at home; ``send``
   crosses to the event loop once. API views are synchronous for this reason
   (``robot.api.base``).
-- ``arun``, the asynchronous face (websockets, tasks): ``send`` runs where it is. The role
-  check reads groups the user object caches (``cyborg_site.roles``); a websocket consumer
-  reads them when it connects, so for its commands the check runs on the loop and the only
-  hop is the audit write. A caller whose user has no cached roles, or a command with a
-  ``check``, does the role check and ``check`` together in one thread hop before sending.
+- ``arun``, the asynchronous face (websockets, tasks, the API's fast path for commands):
+  ``send`` runs where it is. The role check reads groups the user object caches
+  (``cyborg_site.roles``); a websocket consumer reads them when it connects, and a cached API
+  token's user has them from its first request. With those, and a ``check`` that reads no
+  database (``check_on_loop``), everything before sending runs on the loop and the only hop is
+  the audit write, on the audit writer's long-lived thread (``robot.commands.audit_writer``).
+  Otherwise the role check and ``check`` run together in one thread hop before sending.
 """
 
 from __future__ import annotations
@@ -29,11 +31,10 @@ from asgiref.sync import async_to_sync, sync_to_async
 
 from cyborg_site.roles import is_operator, roles_cached
 from robot.commands.audit import audit_record
+from robot.commands.audit_writer import writer
 from robot.link.bus import RobotError
 
-# Not database_sync_to_async: it closes the calling thread's connection, which for a
-# synchronous caller (a DRF view) is the request's own connection.
-_record = sync_to_async(audit_record, thread_sensitive=True)
+_record = writer.record
 
 
 class Forbidden(RobotError):
@@ -77,6 +78,7 @@ class Command:
     allowed: Callable[[Any], bool] = is_operator
     refusal: str = FORBIDDEN  # what a person whose role ``allowed`` refuses is told
     result: dict[str, Any] = field(default_factory=dict)
+    check_on_loop: bool = False  # ``check`` reads no database: ``arun`` may run it on the event loop
 
 
 def _audit_fields(command: Command, user: Any, source: str) -> dict[str, Any]:
@@ -115,12 +117,16 @@ def run_command(command: Command, *, user: Any, source: str) -> str:
 async def arun(command: Command, *, user: Any, source: str) -> str:
     """The asynchronous face: at most one thread hop before sending, one for the audit entry."""
     audit = _audit_fields(command, user, source)
-    if command.check is _unchecked and roles_cached(user):
+    if roles_cached(user) and (command.check is _unchecked or command.check_on_loop):
         if not command.allowed(user):  # reads only the cached roles: no database on the loop
             error = Forbidden(command.refusal)
             await _record(**audit, ok=False, outcome=error.message, error_code=error.code)
             raise error
-        checked = None
+        try:
+            checked = command.check()
+        except RobotError as exc:
+            await _record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
+            raise
     else:
         checked = await _aprepare(command, audit)
     try:

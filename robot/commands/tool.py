@@ -3,7 +3,8 @@
 Each command is a builder (``say(text)``, ``set_emotion(name)``…) returning a ``Command`` that
 either face of the pipeline runs (``run_command`` from the API, ``arun`` from async code).
 The input is checked before anything is published, so a refusal for bad input is audited
-like any other failure. All of them publish one ``std_msgs/String``; they differ in the
+like any other failure; checks that read no database (events, speech, the emotion switch; not
+the presets) may run on the event loop. All of them publish one ``std_msgs/String``; they differ in the
 check, the topic and the words of the outcome.
 """
 
@@ -21,7 +22,7 @@ from robot.teleop.latch import ensure_released
 
 def _string_command(
     *, action: str, field: str, value: Any, key: str, clean: Callable[[Any], str], outcome: Callable[[str], str],
-    needs_release: bool = False,
+    needs_release: bool = False, check_on_loop: bool = False,
 ) -> Command:
     async def send(data: str) -> str:
         if needs_release:
@@ -29,7 +30,7 @@ def _string_command(
         await bus.apublish(key, {"data": data})
         return outcome(data)
 
-    return Command(action, {field: value}, send, check=lambda: clean(value))
+    return Command(action, {field: value}, send, check=lambda: clean(value), check_on_loop=check_on_loop)
 
 
 def _switch(on: Any) -> str:
@@ -39,12 +40,12 @@ def _switch(on: Any) -> str:
 def send_event(value: Any) -> Command:
     # An event can start a behaviour or a demo: a mode change by another name, so not while E-STOPped.
     return _string_command(action="event", field="event", value=value, key="register_event", clean=v.clean_event,
-                           outcome=lambda e: f"Sent event {e}", needs_release=True)
+                           outcome=lambda e: f"Sent event {e}", needs_release=True, check_on_loop=True)
 
 
 def say(text: Any) -> Command:
     return _string_command(action="speech", field="text", value=text, key="text_to_speech", clean=v.clean_speech,
-                           outcome=lambda t: f"Queued {len(t)} characters for speech")
+                           outcome=lambda t: f"Queued {len(t)} characters for speech", check_on_loop=True)
 
 
 def set_emotion(value: Any) -> Command:
@@ -54,7 +55,7 @@ def set_emotion(value: Any) -> Command:
 
 def set_emotion_system(on: Any) -> Command:
     return _string_command(action="emotion_system", field="on", value=on, key="emotional_controller", clean=_switch,
-                           outcome=lambda s: f"Emotion system {s.lower()}")
+                           outcome=lambda s: f"Emotion system {s.lower()}", check_on_loop=True)
 
 
 def play_clip(clip: Any) -> Command:

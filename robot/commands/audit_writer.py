@@ -1,0 +1,108 @@
+"""Audit entries written from the event loop by one long-lived thread that keeps its connection.
+
+Django's connections belong to a thread, and a thread per request (``ThreadSensitiveContext``)
+meant a new database connection for every command's audit row: most of the row's cost. Here the
+asynchronous face's audit rows go to one worker thread whose connection stays open between
+writes and is closed after ``IDLE_CLOSE_S`` without any, so a quiet server holds none.
+
+A write is never dropped and never fails silently: it runs even when its caller was cancelled,
+a failure is logged here and raised to the caller (the API answers 503), and a write that meets
+a kept connection the database has since dropped is retried once on a new one.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import queue
+import threading
+from concurrent.futures import Future, InvalidStateError
+from typing import Any
+
+from django.db import InterfaceError, OperationalError, connection
+
+from robot.commands.audit import audit_record
+from robot.models import AuditEntry
+
+log = logging.getLogger(__name__)
+
+IDLE_CLOSE_S = 10.0
+
+_Job = tuple[Future, dict[str, Any] | None]  # no fields: close the connection
+
+
+def _write(fields: dict[str, Any]) -> AuditEntry:
+    kept = connection.connection is not None
+    try:
+        return audit_record(**fields)
+    except (OperationalError, InterfaceError):
+        connection.close()
+        if not kept:
+            raise
+        log.warning("audit: the kept database connection was gone; writing on a new one")
+    return audit_record(**fields)
+
+
+class AuditWriter:
+    def __init__(self, idle_close_s: float = IDLE_CLOSE_S) -> None:
+        self.idle_close_s = idle_close_s
+        self._jobs: queue.SimpleQueue[_Job] = queue.SimpleQueue()
+        self._thread: threading.Thread | None = None
+        self._start = threading.Lock()
+        self.writes = 0  # jobs handed to the thread: one thread crossing each
+
+    async def record(self, **fields: Any) -> AuditEntry:
+        """``audit_record(**fields)`` on the writer's thread."""
+        future: Future[AuditEntry] = Future()
+        self._ensure_thread()
+        self.writes += 1
+        self._jobs.put((future, fields))
+        return await asyncio.shield(asyncio.wrap_future(future))
+
+    def close_connection(self, timeout: float = 10.0) -> None:
+        """Close the writer's connection now (e.g. before a test database is dropped)."""
+        if self._thread is not None and self._thread.is_alive():
+            done: Future[None] = Future()
+            self._jobs.put((done, None))
+            done.result(timeout)
+
+    def _ensure_thread(self) -> None:
+        if self._thread is None or not self._thread.is_alive():
+            with self._start:
+                if self._thread is None or not self._thread.is_alive():
+                    self._thread = threading.Thread(target=self._run, name="audit-writer", daemon=True)
+                    self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            try:
+                future, fields = self._jobs.get(timeout=self.idle_close_s)
+            except queue.Empty:
+                connection.close()
+                continue
+            if fields is None:
+                connection.close()
+                _settle(future)
+                continue
+            try:
+                result = _write(fields)
+            except BaseException as exc:
+                connection.close()
+                log.exception("audit: the entry for %s by %s was not written", fields.get("action"),
+                              getattr(fields.get("user"), "username", "?"))
+                _settle(future, exception=exc)
+            else:
+                _settle(future, result=result)
+
+
+def _settle(future: Future, *, result: Any = None, exception: BaseException | None = None) -> None:
+    try:
+        if exception is not None:
+            future.set_exception(exception)
+        else:
+            future.set_result(result)
+    except InvalidStateError:  # its caller is gone; the write was made (or logged) all the same
+        pass
+
+
+writer = AuditWriter()

@@ -1,0 +1,113 @@
+"""The audit writer: one thread and one kept connection for the rows, never a silent loss."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+
+import pytest
+from django.db import OperationalError
+from django.db.backends.signals import connection_created
+
+from robot.commands import audit_writer
+from robot.commands.audit_writer import AuditWriter
+from robot.models import AuditEntry
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+
+def fields(action: str) -> dict:
+    return {"user": None, "source": "api", "action": action, "params": {}, "ok": True, "outcome": "done"}
+
+
+@pytest.fixture
+def writer():
+    made = AuditWriter()
+    yield made
+    made.close_connection()
+
+
+@pytest.fixture
+def opened():
+    """Connections the writer's thread opened."""
+    threads: list[str] = []
+
+    def record(sender, connection, **kwargs):
+        if threading.current_thread().name == "audit-writer":
+            threads.append("audit-writer")
+
+    connection_created.connect(record)
+    yield threads
+    connection_created.disconnect(record)
+
+
+async def test_it_writes_every_row_on_one_connection_it_keeps(writer, opened):
+    for n in range(3):
+        await writer.record(**fields(f"test.kept{n}"))
+    assert opened == ["audit-writer"]
+    assert await AuditEntry.objects.filter(action__startswith="test.kept").acount() == 3
+    writer.close_connection()
+    await writer.record(**fields("test.reopened"))
+    assert opened == ["audit-writer", "audit-writer"]
+
+
+async def test_a_failed_write_is_logged_and_raised(writer, monkeypatch, caplog):
+    def broken(**kwargs):
+        raise OperationalError("disk I/O error")
+
+    monkeypatch.setattr(audit_writer, "audit_record", broken)
+    with caplog.at_level(logging.ERROR, logger="robot.commands.audit_writer"), pytest.raises(OperationalError):
+        await writer.record(**fields("test.lost"))
+    assert "the entry for test.lost by ? was not written" in caplog.text
+
+
+async def test_a_kept_connection_that_was_dropped_is_replaced_once(writer, monkeypatch, caplog):
+    await writer.record(**fields("test.first"))  # the connection is now kept
+    real, calls = audit_writer.audit_record, []
+
+    def dropped_once(**kwargs):
+        calls.append(kwargs["action"])
+        if len(calls) == 1:
+            raise OperationalError("server closed the connection unexpectedly")
+        return real(**kwargs)
+
+    monkeypatch.setattr(audit_writer, "audit_record", dropped_once)
+    with caplog.at_level(logging.WARNING, logger="robot.commands.audit_writer"):
+        await writer.record(**fields("test.second"))
+    assert calls == ["test.second", "test.second"]
+    assert await AuditEntry.objects.filter(action="test.second").acount() == 1
+    assert "writing on a new one" in caplog.text
+
+
+async def test_a_fresh_connection_that_fails_is_not_retried(writer, monkeypatch):
+    calls = []
+
+    def refused(**kwargs):
+        calls.append(kwargs["action"])
+        raise OperationalError("connection refused")
+
+    monkeypatch.setattr(audit_writer, "audit_record", refused)
+    with pytest.raises(OperationalError):
+        await writer.record(**fields("test.refused"))
+    assert calls == ["test.refused"]
+
+
+async def test_a_cancelled_caller_still_gets_its_row_written(writer, monkeypatch):
+    real, started, release = audit_writer.audit_record, threading.Event(), threading.Event()
+
+    def slow(**kwargs):
+        started.set()
+        release.wait(5)
+        return real(**kwargs)
+
+    monkeypatch.setattr(audit_writer, "audit_record", slow)
+    task = asyncio.ensure_future(writer.record(**fields("test.cancelled")))
+    await asyncio.to_thread(started.wait, 5)
+    task.cancel()
+    release.set()
+    with pytest.raises(asyncio.CancelledError):
+        await task
+    monkeypatch.setattr(audit_writer, "audit_record", real)
+    await writer.record(**fields("test.after"))  # queued behind it: the cancelled one is written by now
+    assert await AuditEntry.objects.filter(action="test.cancelled").acount() == 1
