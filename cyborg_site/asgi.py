@@ -16,12 +16,13 @@ from cyborg_site import direct_frames  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
+from robot.api.fast_commands import FastCommandApp  # noqa: E402
 from robot.api.fast_state import FastStateApp  # noqa: E402
 from robot.link.hosting import autostart_in_daphne  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
-        "http": CountRequests(FastStateApp(django_asgi_app)),
+        "http": CountRequests(FastCommandApp(FastStateApp(django_asgi_app), django_asgi_app)),
         "websocket": OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns))),
     }
 )

@@ -33,7 +33,7 @@ def _value_only(build: Callable[[Any], Command]) -> Callable[[Any, Any], Command
     return lambda value, user: build(value)
 
 
-class _CommandView(CommandAPIView):
+class FieldCommandView(CommandAPIView):
     action_name: ClassVar[str]
     field: ClassVar[str]
     command: ClassVar[Callable[[Any, Any], Command]]  # (value, user) -> the command
@@ -48,7 +48,7 @@ class _CommandView(CommandAPIView):
 def _command_view(name: str, *, action: str, field: str, command: Callable[[Any, Any], Command], summary: str,
                   description: str, input_field: serializers.Field, errors: tuple[int, ...] = ()) -> type[APIView]:
     """One view per command: the class, and its OpenAPI description."""
-    view = type(name, (_CommandView,), {"action_name": action, "field": field, "command": staticmethod(command),
+    view = type(name, (FieldCommandView,), {"action_name": action, "field": field, "command": staticmethod(command),
                                         "__doc__": description})
     return extend_schema(
         summary=summary, description=description, tags=["commands"],

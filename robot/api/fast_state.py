@@ -30,11 +30,46 @@ from robot.api.tokens import CachedTokenAuthentication
 from robot.commands.selectors import arobot_state
 
 STATE_PATH = "/api/robot/state/"
-_JSON_ACCEPT = frozenset({"", "*/*", "application/json", "application/*"})
+JSON_ACCEPT = frozenset({"", "*/*", "application/json", "application/*"})
 
 
 def _never_called(request: Any) -> HttpResponse:
     raise AssertionError("the fast path builds its own response")
+
+
+class SiteChecks:
+    """What the site's middleware does for a request answered outside Django: the host check, the
+    HTTPS redirect (either means Django must answer) and the response headers it adds."""
+
+    def __init__(self) -> None:
+        self._security = SecurityMiddleware(_never_called)
+        self._frames = XFrameOptionsMiddleware(_never_called)
+
+    def request(self, scope: dict[str, Any]) -> ASGIRequest | None:
+        """A bodiless request for ``scope``, or None when Django must answer (bad host, a redirect)."""
+        request = ASGIRequest(scope, io.BytesIO())
+        try:
+            request.get_host()  # ALLOWED_HOSTS, as CommonMiddleware checks it
+        except DisallowedHost:
+            return None
+        if self._security.process_request(request) is not None:  # an HTTPS redirect
+            return None
+        return request
+
+    def finish(self, request: ASGIRequest, response: HttpResponse) -> HttpResponse:
+        response["Content-Length"] = str(len(response.content))  # as CommonMiddleware sets it
+        self._frames.process_response(request, response)
+        return self._security.process_response(request, response)
+
+
+def json_accepted(accept: bytes) -> bool:
+    return accept.split(b";", 1)[0].strip().decode("latin1") in JSON_ACCEPT
+
+
+def trusted_token_user(authorization: bytes) -> Any:
+    """The user of an ``Authorization: Token`` header the token cache trusts, else None."""
+    scheme, _, key = authorization.decode("latin1").partition(" ")
+    return CachedTokenAuthentication.cached_user(key.strip()) if scheme.lower() == "token" else None
 
 
 class FastStateApp:
@@ -43,8 +78,7 @@ class FastStateApp:
     def __init__(self, django_app: ASGIHandler) -> None:
         self.django_app = django_app
         self._renderer = SafeJSONRenderer()
-        self._security = SecurityMiddleware(_never_called)
-        self._frames = XFrameOptionsMiddleware(_never_called)
+        self._site = SiteChecks()
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
@@ -64,21 +98,12 @@ class FastStateApp:
                 authorization = value
             elif name == b"accept":
                 accept = value
-        if accept.split(b";", 1)[0].strip().decode("latin1") not in _JSON_ACCEPT:
+        if not json_accepted(accept) or trusted_token_user(authorization) is None:
             return None
-        scheme, _, key = authorization.decode("latin1").partition(" ")
-        if scheme.lower() != "token" or CachedTokenAuthentication.cached_user(key.strip()) is None:
-            return None
-        request = ASGIRequest(scope, io.BytesIO())
-        try:
-            request.get_host()  # ALLOWED_HOSTS, as CommonMiddleware checks it
-        except DisallowedHost:
-            return None
-        if self._security.process_request(request) is not None:  # an HTTPS redirect
+        request = self._site.request(scope)
+        if request is None:
             return None
         response = HttpResponse(self._renderer.render(await arobot_state()), content_type="application/json")
         response["Vary"] = "Accept"
         response["Allow"] = "GET, HEAD, OPTIONS"
-        response["Content-Length"] = str(len(response.content))  # as CommonMiddleware sets it
-        self._frames.process_response(request, response)
-        return self._security.process_response(request, response)
+        return self._site.finish(request, response)
