@@ -8,11 +8,13 @@
    simulator stamps every message it receives with its wall clock; same machine, same clock):
    ``command_to_robot_p50_ms``, ``command_to_robot_p99_ms``; and the API round trip.
 
-Run: ``.venv/bin/python bench/api_throughput.py`` (no arguments, ~40 s). Prints ``name: value``.
+Run: ``.venv/bin/python bench/api_throughput.py`` (~40 s; ``--only command`` or ``--only state`` for
+one part). Prints ``name: value``.
 """
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import json
 import logging
@@ -138,16 +140,16 @@ def received(stack: Stack, topic: str, last: int) -> dict:
         return json.loads(res.read())
 
 
-def speech_commands(stack: Stack, token: str) -> tuple[list[float], list[float]]:
+def speech_commands(stack: Stack, token: str, query: str = "") -> tuple[list[float], list[float]]:
     topic = ri.topic("text_to_speech").name
     before = received(stack, topic, 0)["count"]
     sent: dict[str, float] = {}
     round_trips = []
     for i in range(SPEECH_N):
-        text = f"bench {i}"
+        text = f"bench {query} {i}"
         sent[text] = time.time()
         t0 = time.perf_counter()
-        call(f"{stack.url}/api/robot/speech/", {"text": text}, token)
+        call(f"{stack.url}/api/robot/speech/{query}", {"text": text}, token)
         round_trips.append((time.perf_counter() - t0) * 1000)
     deadline = time.monotonic() + 10
     while received(stack, topic, 0)["count"] < before + SPEECH_N and time.monotonic() < deadline:
@@ -160,22 +162,34 @@ def speech_commands(stack: Stack, token: str) -> tuple[list[float], list[float]]
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", choices=("state", "command"), help="run one part of the bench")
+    parser.add_argument("--compare", action="store_true",
+                        help="also send the commands through Django (a query string keeps them off the fast "
+                             "path), printed as command_django_*")
+    args = parser.parse_args()
+    only = args.only
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
     with Stack(sim_args=("--startup-s", "0.5"), env={"COMMAND_THROTTLE_RATE": "100000/min"}) as stack:
         stack.wait_robot_online()
         token = call(f"{stack.url}/api/auth/token/", {"username": "otto", "password": PASSWORD})["token"]
-        log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
-        state_api(stack, token)
-        log.info("%d sequential speech commands", SPEECH_N)
-        cpu0 = cpu_seconds(stack.web.pid)
-        to_robot, round_trips = speech_commands(stack, token)
-        cpu_ms = (cpu_seconds(stack.web.pid) - cpu0) * 1000 / SPEECH_N
-        print(f"command_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
-        print(f"command_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
-        print(f"command_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
-        print(f"command_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
-        print(f"command_server_cpu_ms: {cpu_ms:.2f}")
-        print(f"command_loadavg: {os.getloadavg()[0]:.1f}")
+        if only != "command":
+            log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
+            state_api(stack, token)
+        if only == "state":
+            return
+        routes = [("command", "")] + ([("command_django", "?via=django")] if args.compare else [])
+        for name, query in routes:
+            log.info("%d sequential speech commands%s", SPEECH_N, " through Django" if query else "")
+            cpu0 = cpu_seconds(stack.web.pid)
+            to_robot, round_trips = speech_commands(stack, token, query)
+            cpu_ms = (cpu_seconds(stack.web.pid) - cpu0) * 1000 / SPEECH_N
+            print(f"{name}_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
+            print(f"{name}_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
+            print(f"{name}_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
+            print(f"{name}_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
+            print(f"{name}_server_cpu_ms: {cpu_ms:.2f}")
+            print(f"{name}_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
 
 
 if __name__ == "__main__":
