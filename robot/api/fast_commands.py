@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import io
 import logging
+from functools import lru_cache
 from typing import Any
 
 from django.conf import settings
@@ -43,6 +44,7 @@ log = logging.getLogger(__name__)
 _PARSER_CONTEXT = {"encoding": "utf-8"}
 
 
+@lru_cache(maxsize=256)
 def command_view(path: str) -> type[FieldCommandView] | None:
     try:
         match = resolve(path)
