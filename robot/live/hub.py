@@ -51,13 +51,16 @@ class FrameWriter(Protocol):
 # Frames are paced by a token bucket: on average at most one frame per socket per TICK_S, with
 # bursts of up to BURST frames at once, so an update rarely waits for the pace (a 10 Hz pose right
 # after a 1 Hz reading goes out at once instead of a tick later). With a token in hand the flush
-# runs as soon as the loop has handled what it already read, without a timer: messages that
-# arrived in one read from rosbridge (the robot publishes pose and odometry together) share a
-# frame, and a lone fresh value goes out at once (bench/live_fanout.py). Fed from Redis (scaled),
+# waits no timer, only FLUSH_TURNS loop turns: time for the loop to poll its sockets once more and
+# pass what it read through the link (read, the link's coalescer task, the hub). The robot
+# publishes pose and odometry together as two rosbridge frames a few tens of microseconds apart;
+# flushed on the pose alone, the odometry would wait for the writes to every socket, and take a
+# second frame (bench/live_fanout.py, LIVE_TRACE_FILE). Fed from Redis (scaled),
 # updates the link published together arrive as separate messages a Redis round trip or two
 # apart: that hub waits REDIS_GATHER_S so they still share a frame.
 TICK_S = 0.02
 BURST = 3.0
+FLUSH_TURNS = 3
 REDIS_GATHER_S = 0.002
 # Per socket: event-like messages kept while it is slow (older ones are dropped and counted).
 MAX_PENDING = 300
@@ -206,7 +209,13 @@ class Hub:
         if wait > 0:
             self.loop.call_at(self.loop.time() + wait, self._flush)
         else:
-            self.loop.call_soon(self._flush)
+            self.loop.call_soon(self._flush_after, FLUSH_TURNS - 1)
+
+    def _flush_after(self, turns: int) -> None:
+        if turns:
+            self.loop.call_soon(self._flush_after, turns - 1)
+        else:
+            self._flush()
 
     def _flush(self) -> None:
         self._flush_at = None

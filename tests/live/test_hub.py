@@ -239,15 +239,35 @@ async def test_a_flood_of_updates_is_paced_to_about_one_frame_per_tick():
     assert i > len(writer.frames)
 
 
-async def test_a_lone_update_is_written_in_the_next_loop_turn_without_waiting_for_a_timer():
+async def test_a_lone_update_is_written_within_a_few_loop_turns_without_waiting_for_a_timer():
+    from robot.live.hub import FLUSH_TURNS
+
     hub = Hub(asyncio.get_running_loop(), tick_s=10.0)  # any wait for a tick or a timer would show
     writer = FakeWriter()
     hub.watch(hub.attach(Recorder().send, writer), ["odom"])
     hub.publish("odom", fragment("odom", 1, 1), 1)
-    assert not writer.frames  # not inside publish: what the loop read in the same turn may join it
-    await asyncio.sleep(0)
-    await asyncio.sleep(0)
+    assert not writer.frames  # not inside publish: what the loop reads meanwhile may join it
+    for _ in range(FLUSH_TURNS):
+        await asyncio.sleep(0)
     assert [u["msg"]["data"] for u in writer.updates()] == [1]
+
+
+async def test_an_update_that_arrives_while_the_loop_reads_joins_the_frame_of_the_one_before():
+    # The pose, then the odometry a moment later in a read of its own, through the link's coalescer task.
+    hub = Hub(asyncio.get_running_loop(), tick_s=10.0)
+    writer = FakeWriter()
+    hub.watch(hub.attach(Recorder().send, writer), ["odom", "robot_pose"])
+    hub.publish("robot_pose", fragment("robot_pose", 1, 1), 1)
+    loop = asyncio.get_running_loop()
+
+    def read_odom() -> None:  # a read callback: the coalescer's task publishes a turn later
+        loop.call_soon(hub.publish, "odom", fragment("odom", 2, 2), 2)
+
+    loop.call_soon(read_odom)
+    await async_wait_until(lambda: writer.frames, timeout=2)
+    await asyncio.sleep(0.05)
+    assert len(writer.frames) == 1
+    assert [u["key"] for u in writer.updates()] == ["robot_pose", "odom"]
 
 
 async def test_updates_offered_in_one_loop_turn_share_one_frame():
