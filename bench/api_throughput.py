@@ -10,6 +10,8 @@
 
 Run: ``.venv/bin/python bench/api_throughput.py`` (~40 s; ``--only command`` or ``--only state`` for
 one part). Prints ``name: value``.
+With ``BENCH_PYSPY=DIR``, py-spy samples the web process over the state API's window (raw folded
+stacks, ``DIR/state_api-PID.txt``).
 """
 
 from __future__ import annotations
@@ -90,8 +92,9 @@ def wrk(url: str, token: str) -> dict[str, float]:
         capture_output=True, text=True, timeout=DURATION_S + 60, check=True,
     ).stdout
     figures = {"rps": float(re.search(r"Requests/sec:\s+([\d.]+)", out)[1]),  # type: ignore[index]
-               "p50": wrk_ms(re.search(r"\b50%\s+(\S+)", out)[1]),  # type: ignore[index]
-               "p99": wrk_ms(re.search(r"\b99%\s+(\S+)", out)[1]),  # type: ignore[index]
+               # The distribution's own lines: "99%" also ends stdev shares such as "71.99%".
+               "p50": wrk_ms(re.search(r"^\s+50%\s+(\S+)", out, re.M)[1]),  # type: ignore[index]
+               "p99": wrk_ms(re.search(r"^\s+99%\s+(\S+)", out, re.M)[1]),  # type: ignore[index]
                "errors": 0.0}
     if non_2xx := re.search(r"Non-2xx or 3xx responses:\s+(\d+)", out):
         figures["errors"] += int(non_2xx[1])
@@ -105,9 +108,21 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def profile(pid: int, name: str) -> subprocess.Popen | None:
+    """With BENCH_PYSPY=DIR: py-spy samples ``pid`` over the window (raw folded stacks)."""
+    out = os.environ.get("BENCH_PYSPY")
+    if not out:
+        return None
+    Path(out).mkdir(parents=True, exist_ok=True)
+    return subprocess.Popen([str(Path(sys.executable).parent / "py-spy"), "record", "--nonblocking", "-p", str(pid),
+                             "-d", str(int(DURATION_S)), "-r", "250", "-f", "raw", "-o", f"{out}/{name}-{pid}.txt"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
 def state_api(stack: Stack, token: str) -> None:
     url = f"{stack.url}/api/robot/state/"
     call_get(url, token)  # the first request checks the token against the database and caches it
+    spy = profile(stack.web.pid, "state_api")
     cpu0, t0 = cpu_seconds(stack.web.pid), time.monotonic()
     if shutil.which("wrk"):
         figures, client = wrk(url, token), "wrk"
@@ -117,6 +132,8 @@ def state_api(stack: Stack, token: str) -> None:
         client = "aiohttp"
     cpu_s = cpu_seconds(stack.web.pid) - cpu0
     cpu = cpu_s / (time.monotonic() - t0) * 100
+    if spy is not None:
+        spy.wait()
     print(f"state_api_client: {client}")
     print(f"state_api_rps: {figures['rps']:.0f}")
     print(f"state_api_p50_ms: {figures['p50']:.1f}")
