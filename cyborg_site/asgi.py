@@ -12,8 +12,9 @@ from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from daphne.http_protocol import WebRequest  # noqa: E402
 from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
-from cyborg_site import direct_frames  # noqa: E402
+from cyborg_site import direct_frames, reaping  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
+from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
@@ -32,9 +33,12 @@ application = ProtocolTypeRouter(
 WebSocketProtocol.tcpNoDelay = True
 # The live hub writes pre-encoded frames straight to each connection (see the module).
 direct_frames.install()
+# Daphne forgets a finished request at once, not at its next once-a-second sweep (see the module).
+reaping.install()
 # Twisted parses POSTed form bodies itself (Daphne never reads the result) and answers a body it
 # cannot parse with a bare, empty 400 before Django sees it; let Django give its usual error.
 WebRequest.__init__ = partialmethod(WebRequest.__init__, parsePOSTFormSubmission=False)
 
 autostart_in_daphne()
+freeze_when_running_in_daphne()
 install_in_daphne()  # SIGTERM: stop listening, finish the requests in flight, then stop
