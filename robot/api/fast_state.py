@@ -4,14 +4,15 @@ Scripts poll the state. Through Django that costs the ASGI handler's thread hops
 chain runs in a thread, the synchronous DRF view crosses back to the loop for the store), the
 whole middleware chain and DRF's machinery, for a read of the in-memory or Redis store.
 
-``FastStateApp`` sits in front of Django's ASGI application and answers exactly one kind of
-request itself: ``GET`` on the state path, no query string, an ``Authorization: Token`` header
-whose token the per-process cache (robot.api.tokens) already trusts, JSON acceptable. The answer
-is the view's: the same data (``arobot_state``), the same renderer, and the response headers the
-site's middleware would add (host check, security headers, frame options). Anything else, and
-every token the cache does not know yet, goes to Django unchanged: that is where a token is
-checked against the database (and cached), where errors get the API's error shape, and where the
-browsable API and sessions live.
+``FastStateApp`` sits in front of Django's ASGI application and answers exactly one kind of request
+itself: ``GET`` on the state path, no query string, an ``Authorization: Token`` header whose token
+the per-process cache (robot.api.tokens) already trusts, JSON acceptable. The answer is the view's:
+the same data (``arobot_state``), the same renderer, and the response headers the site's middleware
+would add (host check, security headers, frame options), worked out through Django's request and
+middleware once per combination of what they read, and sent as two ASGI messages with no Django
+request or response per call. Anything else, and every token the cache does not know yet, goes to
+Django unchanged: that is where a token is checked against the database (and cached), where errors
+get the API's error shape, and where the browsable API and sessions live.
 """
 
 from __future__ import annotations
@@ -19,8 +20,10 @@ from __future__ import annotations
 import io
 from typing import Any
 
+from django.conf import settings
 from django.core.exceptions import DisallowedHost
 from django.core.handlers.asgi import ASGIHandler, ASGIRequest
+from django.core.signals import setting_changed
 from django.http import HttpResponse
 from django.middleware.clickjacking import XFrameOptionsMiddleware
 from django.middleware.security import SecurityMiddleware
@@ -31,6 +34,11 @@ from robot.commands.selectors import arobot_state
 
 STATE_PATH = "/api/robot/state/"
 JSON_ACCEPT = frozenset({"", "*/*", "application/json", "application/*"})
+# The request headers the host check and the security middleware read (besides scheme and server).
+_CHECKED_HEADERS = frozenset({b"host", b"x-forwarded-host", b"x-forwarded-port", b"x-forwarded-proto"})
+_CHECKS_KEPT = 64
+
+Headers = list[tuple[bytes, bytes]]
 
 
 def _never_called(request: Any) -> HttpResponse:
@@ -57,8 +65,8 @@ class SiteChecks:
         return request
 
     def finish(self, request: ASGIRequest, response: HttpResponse) -> HttpResponse:
-        response["Content-Length"] = str(len(response.content))  # as CommonMiddleware sets it
         self._frames.process_response(request, response)
+        response["Content-Length"] = str(len(response.content))  # where CommonMiddleware sets it
         return self._security.process_response(request, response)
 
 
@@ -79,31 +87,70 @@ class FastStateApp:
         self.django_app = django_app
         self._renderer = SafeJSONRenderer()
         self._site = SiteChecks()
+        # The host check and the response headers depend only on a few request headers, the scheme and
+        # the server address, and on settings: worked out once per combination (a poller sends the same
+        # ones every time), through Django's own request, middleware and response.
+        self._checked: dict[tuple[Any, ...], tuple[Headers, Headers] | None] = {}
+        self._proxy_ssl_header = _proxy_ssl_header()
+        setting_changed.connect(self._forget_checks)
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
-            response = await self.answer(scope)
-            if response is not None:
-                await self.django_app.send_response(response, send)
+            headers = self.response_headers(scope)
+            if headers is not None:
+                body = self._renderer.render(await arobot_state())
+                before, after = headers
+                await send({"type": "http.response.start", "status": 200,
+                            "headers": [*before, (b"Content-Length", str(len(body)).encode()), *after]})
+                await send({"type": "http.response.body", "body": body})
                 return
         await self.django_app(scope, receive, send)
 
-    async def answer(self, scope: dict[str, Any]) -> HttpResponse | None:
-        """The response, or None when Django must answer (unknown token, other formats, bad host…)."""
+    def response_headers(self, scope: dict[str, Any]) -> tuple[Headers, Headers] | None:
+        """The answer's headers before and after Content-Length, or None when Django must answer
+        (unknown token, other formats, bad host, an HTTPS redirect…)."""
         if scope.get("query_string") or scope.get("root_path"):
             return None
         authorization = accept = b""
+        checked = []
+        proxy_ssl_header = self._proxy_ssl_header
         for name, value in scope["headers"]:
             if name == b"authorization":
                 authorization = value
             elif name == b"accept":
                 accept = value
+            elif name in _CHECKED_HEADERS or name == proxy_ssl_header:
+                checked.append((name, value))
         if not json_accepted(accept) or trusted_token_user(authorization) is None:
             return None
+        check = (scope.get("scheme"), tuple(scope.get("server") or ()), tuple(checked))
+        try:
+            return self._checked[check]
+        except KeyError:
+            pass
+        if len(self._checked) >= _CHECKS_KEPT:  # hosts that vary per request (hostile ones) only cost a check
+            self._checked.clear()
+        headers = self._checked[check] = self._check(scope)
+        return headers
+
+    def _check(self, scope: dict[str, Any]) -> tuple[Headers, Headers] | None:
         request = self._site.request(scope)
         if request is None:
             return None
-        response = HttpResponse(self._renderer.render(await arobot_state()), content_type="application/json")
+        response = HttpResponse(content_type="application/json")
         response["Vary"] = "Accept"
         response["Allow"] = "GET, HEAD, OPTIONS"
-        return self._site.finish(request, response)
+        response = self._site.finish(request, response)
+        headers = [(name.encode("ascii"), value.encode("latin1")) for name, value in response.items()]
+        at = [name for name, _ in headers].index(b"Content-Length")  # each answer's own length goes there
+        return headers[:at], headers[at + 1:]
+
+    def _forget_checks(self, **kwargs: Any) -> None:
+        self._checked.clear()
+        self._proxy_ssl_header = _proxy_ssl_header()
+
+
+def _proxy_ssl_header() -> bytes:
+    """The ASGI name of the header ``SECURE_PROXY_SSL_HEADER`` names (it decides ``is_secure``)."""
+    header = settings.SECURE_PROXY_SSL_HEADER
+    return header[0].removeprefix("HTTP_").replace("_", "-").lower().encode("latin1") if header else b""

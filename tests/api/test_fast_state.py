@@ -102,3 +102,49 @@ async def test_an_unknown_token_goes_to_django_and_is_refused(django_calls):
     response = await get({"Authorization": "Token nope"})
     assert response["status"] == 401 and django_calls == [PATH]
     assert not CachedTokenAuthentication._cache
+
+
+async def test_its_headers_are_the_ones_django_sends(viewer, django_calls):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    through_django, fast = await get(headers), await get(headers)
+    assert django_calls == [PATH]
+    assert [name for name, _ in fast["headers"]] == [name for name, _ in through_django["headers"]]
+    assert {k: v for k, v in fast["headers"] if k != b"Content-Length"} == \
+        {k: v for k, v in through_django["headers"] if k != b"Content-Length"}
+    assert dict(fast["headers"])[b"Content-Length"] == str(len(fast["body"])).encode()
+
+
+async def test_a_host_no_longer_allowed_goes_to_django_again(viewer, django_calls, settings):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    await get(headers)
+    assert (await get(headers))["status"] == 200 and django_calls == [PATH]
+    settings.ALLOWED_HOSTS = ["robot.example"]
+    assert (await get(headers))["status"] == 400
+    assert django_calls == [PATH, PATH]
+
+
+async def test_hsts_follows_the_proxys_scheme_header(viewer, settings):
+    from asgiref.sync import sync_to_async
+
+    from cyborg_site.asgi import django_asgi_app
+
+    settings.SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
+    settings.SECURE_HSTS_SECONDS = 3600
+    app = fast_state.FastStateApp(django_asgi_app)
+    headers = await sync_to_async(token_for)(viewer)
+
+    async def hsts(proto: str) -> bytes | None:
+        raw = [(b"host", b"127.0.0.1"), (b"authorization", headers["Authorization"].encode()),
+               (b"x-forwarded-proto", proto.encode())]
+        response = await HttpCommunicator(app, "GET", PATH, headers=raw).get_response(timeout=10)
+        assert response["status"] == 200
+        return dict(response["headers"]).get(b"Strict-Transport-Security")
+
+    await hsts("https")  # through Django (its middleware was built with the settings of its start): the token is new
+    assert await hsts("https") == b"max-age=3600"
+    assert await hsts("http") is None
+    assert await hsts("https") == b"max-age=3600"
