@@ -9,7 +9,7 @@ django_asgi_app = get_asgi_application()
 
 from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
-from daphne.http_protocol import WebRequest  # noqa: E402
+from daphne.http_protocol import HTTPFactory, WebRequest  # noqa: E402
 from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
 from cyborg_site import direct_frames, reaping  # noqa: E402
@@ -38,6 +38,10 @@ reaping.install()
 # Twisted parses POSTed form bodies itself (Daphne never reads the result) and answers a body it
 # cannot parse with a bare, empty 400 before Django sees it; let Django give its usual error.
 WebRequest.__init__ = partialmethod(WebRequest.__init__, parsePOSTFormSubmission=False)
+# Daphne writes its own access log line per request and sends Twisted's log nowhere, but the embedded
+# link's roslibpy routes Twisted's log to Python logging again: each request was logged a second time
+# in Twisted's format, through three loggers (an eighth of the state API's CPU). Daphne's line stays.
+HTTPFactory.log = lambda self, request: None
 
 autostart_in_daphne()
 freeze_when_running_in_daphne()
