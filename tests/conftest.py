@@ -122,6 +122,16 @@ def _private_redis_prefix():
         django_settings.CHANNEL_LAYERS["default"]["CONFIG"]["prefix"] = f"cyborg-test-{os.getpid()}"
 
 
+@pytest.fixture(scope="session")
+def django_db_setup(django_db_setup):
+    """pytest-django's, with the audit writer's connection closed before the test database is
+    dropped (a refusal audited after its test ended may have opened it again)."""
+    yield
+    from robot.commands.audit_writer import writer
+
+    writer.close_connection()
+
+
 @pytest.fixture(autouse=True)
 def _audit_writer_connection_closed():
     """The audit writer keeps its connection between writes; a test ends with it closed, so the

@@ -15,10 +15,10 @@ from django.template.loader import render_to_string
 from robot.api.errors import (
     UNAVAILABLE_TEXT,
     api_error,
+    api_server_error,
     bad_request_detail,
     is_api_path,
     unavailable,
-    unavailable_detail,
 )
 
 log = logging.getLogger(__name__)
@@ -55,14 +55,10 @@ def not_found(request: HttpRequest, exception: Exception | None = None) -> HttpR
 def server_error(request: HttpRequest) -> HttpResponse:
     # Django calls this from inside its except block: the exception is still at hand.
     exc = sys.exc_info()[1]
+    if is_api_path(request.path):
+        return api_server_error(exc)
     service = unavailable(exc) if exc else None
     if service:
-        if is_api_path(request.path):
-            response = api_error(503, unavailable_detail(service), "unavailable")
-            response["Retry-After"] = "5"
-            return response
         return error_page(503, "Temporarily unavailable",
                           f"The ground station cannot work right now: {UNAVAILABLE_TEXT[service]}.", retry=True)
-    if is_api_path(request.path):
-        return api_error(500, "Internal error; it has been logged.", "error")
     return error_page(500, "Something went wrong", "An internal error occurred; it has been logged.")

@@ -42,6 +42,16 @@ def api_error(status_code: int, detail: str, code: str, field: str | None = None
     return JsonResponse(error_body(detail, code, field), status=status_code)
 
 
+def api_server_error(exc: BaseException | None) -> JsonResponse:
+    """The API's answer to an exception nothing handled: 503 for a service that is down, else 500."""
+    service = unavailable(exc) if exc else None
+    if service:
+        response = api_error(503, unavailable_detail(service), "unavailable")
+        response["Retry-After"] = "5"
+        return response
+    return api_error(500, "Internal error; it has been logged.", "error")
+
+
 def is_api_path(path: str) -> bool:
     return path.startswith(API_PREFIX)
 

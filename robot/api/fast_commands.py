@@ -32,9 +32,8 @@ from rest_framework.exceptions import APIException
 from rest_framework.request import Request
 
 from cyborg_site.roles import roles_cached
-from dashboard.views.errors import server_error
 from robot.api.commands import FieldCommandView
-from robot.api.errors import BoundedJSONParser, SafeJSONRenderer, api_exception_handler
+from robot.api.errors import BoundedJSONParser, SafeJSONRenderer, api_exception_handler, api_server_error
 from robot.api.fast_state import SiteChecks, json_accepted, trusted_token_user
 from robot.api.validation import body_dict, reject_unknown
 from robot.commands.pipeline import Command, arun
@@ -137,7 +136,7 @@ class FastCommandApp:
             handled = api_exception_handler(exc, {"view": view})
             if handled is None:
                 log.exception("API command %s failed", request.path)
-                return self._site.finish(request, server_error(request))
+                return self._site.finish(request, api_server_error(exc))
             response = self._render(handled.status_code, handled.data)
             for name, value in handled.headers.items():
                 if name.lower() != "content-type":

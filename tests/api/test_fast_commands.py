@@ -180,3 +180,16 @@ async def test_an_uncached_token_or_user_goes_to_django(operator, django_calls):
     await post(key, body=b"{nope")  # a 400 through Django: the token is cached, the roles not read
     await post(key, body=b"{nope")
     assert django_calls == [SPEECH, SPEECH]
+
+
+async def test_an_unexpected_failure_answers_500_as_the_view_does(operator, monkeypatch, django_calls):
+    from robot.link import bus
+
+    key = await trusted(operator)
+
+    async def broken(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(bus, "apublish", broken)
+    response = await both_ways(monkeypatch, django_calls, key, SPEECH, {"text": "boom"})
+    assert response["status"] == 500 and json.loads(response["body"])["code"] == "error"
