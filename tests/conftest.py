@@ -55,6 +55,14 @@ def pytest_collection_modifyitems(config, items):
 # --- users by role -----------------------------------------------------------------------
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _few_rounds_password_hashing():
+    from django.test import override_settings
+
+    with override_settings(PASSWORD_HASHERS=["tests.hashing.FewRoundsPBKDF2PasswordHasher"]):
+        yield
+
+
 def _user(username: str, role: Role):
     from cyborg_site.roles import role_of
     from dashboard.accounts import create_user
