@@ -7,6 +7,7 @@ given DATABASE_URL), free ports, and users per role.
 
 from __future__ import annotations
 
+import atexit
 import http.cookiejar
 import os
 import re
@@ -25,6 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
 PASSWORD = "correct-horse-battery"
 USERS = {"ada": "admin", "otto": "operator", "olga": "operator", "vera": "viewer"}
+_migrated: dict[bool, Path] = {}  # with USERS or without: a migrated SQLite file for Stack.prepare_database
 
 
 def free_port() -> int:
@@ -100,15 +102,33 @@ class Stack:
         self._terminate(self.sim_proc)
 
     def start(self) -> Stack:
-        self.manage("migrate", "--noinput")
-        if self.users:
-            self.add_users()
+        self.prepare_database()
         if self.with_sim:
             self.start_sim()
         if self.scaled:
             self.start_link()
         self.start_web()
         return self
+
+    def prepare_database(self) -> None:
+        """Migrated, with USERS unless told otherwise: a copy of the first such SQLite file of this
+        test process (migrating costs seconds of CPU per stack), made by migrating the first time."""
+        db = self.tmp / "db.sqlite3"
+        own_sqlite = self.env["DATABASE_URL"] == f"sqlite:///{db}"
+        template = _migrated.get(self.users) if own_sqlite else None
+        if template is not None:
+            for path in template.parent.glob("db.sqlite3*"):  # with its WAL, if the last writer left one
+                shutil.copy(path, self.tmp / path.name)
+            return
+        self.manage("migrate", "--noinput")
+        if self.users:
+            self.add_users()
+        if own_sqlite:
+            keep = Path(tempfile.mkdtemp(prefix="cyborg-stack-db-"))
+            atexit.register(shutil.rmtree, keep, True)
+            for path in self.tmp.glob("db.sqlite3*"):
+                shutil.copy(path, keep / path.name)
+            _migrated[self.users] = keep / "db.sqlite3"
 
     def add_users(self) -> None:
         """``manage.py adduser`` for each of USERS, in one process: Django's start-up is most of a command's cost."""
