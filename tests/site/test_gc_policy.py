@@ -19,7 +19,8 @@ def test_it_collects_startup_garbage_then_freezes_what_is_alive():
     try:
         frozen = freeze_startup_heap()
         assert gone() is None
-        assert frozen == gc.get_freeze_count() > 0
+        # Not equal to a later count: a frozen object freed by reference counting leaves the frozen set.
+        assert frozen > 0 and gc.get_freeze_count() > 0
         assert not any(o is alive for o in gc.get_objects())  # out of the collector's sight
     finally:
         gc.unfreeze()
