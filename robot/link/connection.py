@@ -190,11 +190,14 @@ class RobotLink:
         self._stopped = True
         if self._serving is not None:
             try:
-                if not self.request_queue:
-                    # Cancelling a Redis layer receive mid-BZPOPMIN can hang its connection; wake it instead.
+                # Wake the loop's pop rather than cancel it: cancelling a Redis layer receive mid-BZPOPMIN
+                # can hang its connection, and a cancelled list pop could lose the request it took.
+                if self.request_queue:
+                    await self._wake_list_pop()
+                else:
                     await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
-                # The loop ends by itself after its current pop (a Redis list pop returns within a
-                # second): a request it took is served, never lost with a cancelled pop.
+                # The loop ends at the stop message, or after its current pop (a Redis list pop returns
+                # within a second) if another link on the list took the message: a request it took is served.
                 await asyncio.wait_for(asyncio.shield(self._serving), redisqueue.POP_TIMEOUT_S + 1)
             except (TimeoutError, Exception):
                 log.warning("robot link request loop did not stop in time")
@@ -216,6 +219,12 @@ class RobotLink:
                 await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
         await cancel_within(list(self._inflight), 1)
         self.connected = False
+
+    async def _wake_list_pop(self) -> None:
+        try:
+            await asyncio.wait_for(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
+        except Exception:
+            log.debug("could not wake the request loop; it stops after its current pop", exc_info=True)
 
     def _spawn(self, coro: Any) -> None:
         task = asyncio.ensure_future(coro)
