@@ -38,9 +38,23 @@ def _cancel_all_tasks_naming_stragglers(loop: asyncio.AbstractEventLoop) -> None
         for task in pending:
             out = io.StringIO()
             task.print_stack(file=out)
-            stacks.append(out.getvalue())
+            stacks.append(out.getvalue() + _awaiting(task))
         raise RuntimeError(f"{len(pending)} task(s) still running {TASK_STOP_S:g} s after being cancelled:\n"
                            + "\n".join(stacks))
+
+
+def _awaiting(task: asyncio.Task) -> str:
+    """Where the task waits, through every coroutine it awaits (``print_stack`` shows its first frame only)."""
+    lines = []
+    awaited = getattr(task.get_coro(), "cr_await", None)
+    while awaited is not None:
+        frame = getattr(awaited, "cr_frame", None) or getattr(awaited, "gi_frame", None)
+        if frame is None:
+            lines.append(f"  awaiting {awaited!r}")
+            break
+        lines.append(f"  awaiting {frame.f_code.co_qualname} at {frame.f_code.co_filename}:{frame.f_lineno}")
+        awaited = getattr(awaited, "cr_await", None) or getattr(awaited, "gi_yieldfrom", None)
+    return "\n".join(lines)
 
 
 asyncio.runners._cancel_all_tasks = _cancel_all_tasks_naming_stragglers  # type: ignore[attr-defined]
