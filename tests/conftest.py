@@ -165,6 +165,17 @@ def _audit_writer_connection_closed():
 
 
 @pytest.fixture(autouse=True)
+def _sync_to_async_connection_closed():
+    """Async tests' ORM calls run on asgiref's one shared thread, whose connection outlives them:
+    closed after each test, or PostgreSQL waits 5 s for it before refusing to drop the test database."""
+    yield
+    from asgiref.sync import SyncToAsync
+    from django.db import connections
+
+    SyncToAsync.single_thread_executor.submit(connections.close_all).result(10)
+
+
+@pytest.fixture(autouse=True)
 def _fresh_layer_and_store(_private_redis_prefix):
     """Each test gets an empty channel layer and latest-state store."""
     from robot import interface
