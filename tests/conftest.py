@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import asyncio
 import io
+import sys
 import threading
+import traceback
 
 import pytest
 from channels.layers import channel_layers
@@ -58,6 +60,25 @@ def _awaiting(task: asyncio.Task) -> str:
 
 
 asyncio.runners._cancel_all_tasks = _cancel_all_tasks_naming_stragglers  # type: ignore[attr-defined]
+
+_shutdown_default_executor = asyncio.BaseEventLoop.shutdown_default_executor
+
+
+async def _shutdown_default_executor_naming_stragglers(self: asyncio.BaseEventLoop) -> None:
+    """The same clean-up's wait for the loop's worker threads, bounded: a call still blocked (say, a
+    database write waiting on a lock the test's own transaction holds until after this) is named
+    with its stack instead of hanging the run; it ends by itself once the transaction does."""
+    try:
+        await asyncio.wait_for(asyncio.shield(_shutdown_default_executor(self)), TASK_STOP_S)
+    except TimeoutError:
+        frames = sys._current_frames()
+        stacks = ["".join(traceback.format_stack(frames[t.ident])) for t in threading.enumerate()
+                  if t.name.startswith("asyncio_") and t.ident in frames]
+        raise RuntimeError(f"the event loop's worker threads were still busy {TASK_STOP_S:g} s after the test:\n"
+                           + "\n".join(stacks)) from None
+
+
+asyncio.BaseEventLoop.shutdown_default_executor = _shutdown_default_executor_naming_stragglers  # type: ignore[method-assign]
 
 
 def pytest_collection_modifyitems(config, items):
