@@ -12,39 +12,19 @@ from rest_framework.authtoken.models import Token
 
 from robot import interface as ri
 from robot.api import fast_commands
-from robot.api.tokens import CachedTokenAuthentication
 from robot.models import AuditEntry
+from tests.api.fastpaths import spy_on_passed_on
 from tests.helpers import wait_until
 
-pytestmark = pytest.mark.django_db(transaction=True)
+pytestmark = [pytest.mark.django_db(transaction=True), pytest.mark.usefixtures("empty_token_cache")]
 
 SPEECH = "/api/robot/speech/"
-
-
-@pytest.fixture(autouse=True)
-def _empty_token_cache():
-    CachedTokenAuthentication._cache.clear()
-    yield
-    CachedTokenAuthentication._cache.clear()
 
 
 @pytest.fixture
 def django_calls(monkeypatch):
     """Requests the fast command path passed on (to the state fast path, then Django)."""
-    from cyborg_site.asgi import application
-
-    app = application.application_mapping["http"]
-    while not isinstance(app, fast_commands.FastCommandApp):  # under the request counter
-        app = app.app
-    calls = []
-    real = app.app
-
-    async def spy(scope, receive, send):
-        calls.append(scope["path"])
-        await real(scope, receive, send)
-
-    monkeypatch.setattr(app, "app", spy)
-    return calls
+    return spy_on_passed_on(monkeypatch, fast_commands.FastCommandApp, "app")
 
 
 async def post(key: str, path: str = SPEECH, body: bytes | dict = b"", **extra: str) -> dict:

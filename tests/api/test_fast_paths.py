@@ -5,14 +5,7 @@ from rest_framework.authtoken.models import Token
 
 from robot.api.tokens import CachedTokenAuthentication
 
-pytestmark = pytest.mark.django_db
-
-
-@pytest.fixture(autouse=True)
-def _empty_token_cache():
-    CachedTokenAuthentication._cache.clear()
-    yield
-    CachedTokenAuthentication._cache.clear()
+pytestmark = [pytest.mark.django_db, pytest.mark.usefixtures("empty_token_cache")]
 
 
 def test_a_known_token_costs_no_query_after_the_first_request(client, viewer, django_assert_num_queries):

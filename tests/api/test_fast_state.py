@@ -9,39 +9,17 @@ from rest_framework.authtoken.models import Token
 
 from robot.api import fast_state
 from robot.api.tokens import CachedTokenAuthentication
+from tests.api.fastpaths import spy_on_passed_on
 
-pytestmark = pytest.mark.django_db(transaction=True)
+pytestmark = [pytest.mark.django_db(transaction=True), pytest.mark.usefixtures("empty_token_cache")]
 
 PATH = "/api/robot/state/"
-
-
-@pytest.fixture(autouse=True)
-def _empty_token_cache():
-    CachedTokenAuthentication._cache.clear()
-    yield
-    CachedTokenAuthentication._cache.clear()
 
 
 @pytest.fixture
 def django_calls(monkeypatch):
     """Requests that reached Django's handler (the fast path's fallback)."""
-    from cyborg_site.asgi import application
-
-    app = application.application_mapping["http"]
-    while not isinstance(app, fast_state.FastStateApp):  # under the request counter (cyborg_site.drain)
-        app = app.app
-    calls = []
-    real = app.django_app
-
-    class Spy:
-        send_response = real.send_response
-
-        async def __call__(self, scope, receive, send):
-            calls.append(scope["path"])
-            await real(scope, receive, send)
-
-    monkeypatch.setattr(app, "django_app", Spy())
-    return calls
+    return spy_on_passed_on(monkeypatch, fast_state.FastStateApp, "django_app")
 
 
 async def get(headers: dict[str, str], path: str = PATH) -> dict:
