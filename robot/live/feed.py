@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+import time
 import weakref
 from typing import Any
 
@@ -27,6 +28,7 @@ log = logging.getLogger(__name__)
 
 RETRY_S = 1.0
 SUBSCRIBE_WAIT_S = 3.0
+GAP_MARGIN_S = 1.0  # an update stamped this long before the subscription was lost may not have come through
 SUBSCRIBER_NAME = f"cyborg-live-{os.getpid()}"  # in Redis's CLIENT LIST
 _clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
 _subscribers: weakref.WeakKeyDictionary[Hub, asyncio.Task] = weakref.WeakKeyDictionary()
@@ -96,22 +98,26 @@ async def alocal_hub() -> Hub:
     return hub
 
 
-def deliver(hub: Hub, data: bytes | str) -> None:
-    """One message from the Redis channel into the hub."""
+def deliver(hub: Hub, data: bytes | str) -> tuple[str, float]:
+    """One message from the Redis channel into the hub; its key and time."""
     raw = data.decode() if isinstance(data, bytes) else data
     key, t, every, text = raw.split("\n", 3)
     if key == STATUS_KEY:
         hub.publish_status(text)
     else:
         hub.publish(key, text, float(t), every=every == "1")
+    return key, float(t)
 
 
 async def run_subscriber(hub: Hub) -> None:
     """Feed ``hub`` from the Redis channel for as long as the process runs; resubscribe after errors.
-    Each time the subscription is (again) in place, the sockets get the stored value of every key
-    they watch: whatever was published while there was no subscription is not lost."""
+    Each time the subscription is in place again, the sockets get every watched key's stored value
+    that is newer than what came through before the gap: what was published meanwhile is not lost."""
     import redis.asyncio
 
+    delivered: dict[str, float] = {}  # key -> time of the newest update that came through
+    subscribed_before = False
+    lost_at: float | None = None
     while True:
         client = redis.asyncio.Redis.from_url(settings.REDIS_URL, client_name=SUBSCRIBER_NAME)
         try:
@@ -121,25 +127,31 @@ async def run_subscriber(hub: Hub) -> None:
                     kind = message.get("type")
                     if kind == "message":
                         try:
-                            deliver(hub, message["data"])
+                            key, t = deliver(hub, message["data"])
                         except ValueError:
                             log.warning("malformed live update on %s", channel())
+                            continue
+                        delivered[key] = max(t, delivered.get(key, 0.0))
                     elif kind == "subscribe":
                         log.info("live updates: subscribed to %s", channel())
-                        await _refresh(hub)
+                        if subscribed_before:
+                            await _refresh(hub, delivered, since=(lost_at or time.time()) - GAP_MARGIN_S)
+                        subscribed_before, lost_at = True, None
                         _ready.setdefault(hub, asyncio.Event()).set()
         except Exception as exc:
             if stop_requested():
                 raise asyncio.CancelledError from exc
+            lost_at = lost_at or time.time()
             log.warning("live update subscription lost; resubscribing in %g s", RETRY_S, exc_info=True)
             await asyncio.sleep(RETRY_S)
         finally:
             await client.aclose()
 
 
-async def _refresh(hub: Hub) -> None:
-    """Offer every watched key's stored value (latest-value keys: an event-like key's lines would repeat)."""
-    keys = [key for key in hub.watched_keys() if not keeps_every_message(key)]
+async def _refresh(hub: Hub, delivered: dict[str, float], *, since: float) -> None:
+    """Offer each watched key's stored value when it is newer than the gap's start and than what came
+    through (an event-like key gets its newest line, never one it already had)."""
+    keys = hub.watched_keys()
     if not keys:
         return
     try:
@@ -148,4 +160,6 @@ async def _refresh(hub: Hub) -> None:
         log.warning("live updates: could not read the stored values after resubscribing", exc_info=True)
         return
     for key, entry in latest.items():
-        hub.publish(key, update_fragment(entry), float(entry["t"]))
+        t = float(entry["t"])
+        if t > max(since, delivered.get(key, 0.0)):
+            hub.publish(key, update_fragment(entry), t, every=keeps_every_message(key))
