@@ -32,12 +32,7 @@ async def test_it_never_holds_a_message_after_a_quiet_spell_even_right_after_a_b
     coalescer = Coalescer(send, loop=asyncio.get_running_loop())
     # 10 Hz at a 10 Hz UI rate, delivered unevenly by a loaded machine: one late by 30 ms, the
     # next early by 30 ms (70 ms after it), then one early again. Each is the first in its period.
-    for i, gap in enumerate((0.0, 0.13, 0.07, 0.09, 0.13, 0.07, 0.1, 0.1)):
-        await asyncio.sleep(gap)
-        coalescer.offer("odom", 10.0, i)
-        for _ in range(3):
-            await asyncio.sleep(0)
-        assert sent == list(range(i + 1)), f"message {i} was held back"
+    await _offer_none_held_back(coalescer, sent, (0.0, 0.13, 0.07, 0.09, 0.13, 0.07, 0.1, 0.1))
     coalescer.close()
 
 
@@ -83,12 +78,7 @@ async def test_it_passes_a_topic_published_at_its_ui_rate_straight_through_after
     coalescer = Coalescer(send, loop=asyncio.get_running_loop())
     # 10 Hz topic at a 10 Hz UI rate: one message arrives 10 ms late, the next ones on time
     # (90 ms after it). None may be held back, or the lag would stick to every later message.
-    for i, gap in enumerate((0.0, 0.11, 0.09, 0.1, 0.1)):
-        await asyncio.sleep(gap)
-        coalescer.offer("odom", 10.0, i)
-        for _ in range(3):
-            await asyncio.sleep(0)
-        assert sent == list(range(i + 1)), f"message {i} was held back"
+    await _offer_none_held_back(coalescer, sent, (0.0, 0.11, 0.09, 0.1, 0.1))
     coalescer.close()
 
 
@@ -109,3 +99,13 @@ async def test_a_topic_at_its_ui_rate_is_passed_straight_through_again_soon_afte
         if i >= 5:
             assert sent[-1] == i, f"message {i} was held back"
     coalescer.close()
+
+
+async def _offer_none_held_back(coalescer, sent: list, gaps: tuple[float, ...]) -> None:
+    """Offer odometry 0, 1, … (10 Hz UI rate) after each of ``gaps``; each must go out within a few loop turns."""
+    for i, gap in enumerate(gaps):
+        await asyncio.sleep(gap)
+        coalescer.offer("odom", 10.0, i)
+        for _ in range(3):
+            await asyncio.sleep(0)
+        assert sent == list(range(i + 1)), f"message {i} was held back"
