@@ -19,14 +19,13 @@ import asyncio
 import base64
 import logging
 import time
-import weakref
 from typing import Any
 
 import roslibpy
 
 from robot import interface as ri
 from robot.audio.mic import DecodeError, Mp3Decoder, PcmRelay, Unplayable, decoder_for, playback_format
-from robot.link.connection import RobotLink, register_handler, register_operation
+from robot.link.connection import RobotLink, one_per_link, register_handler, register_operation
 from robot.live.groups import MIC_GROUP, LinkReply, LinkRequest, SharedMessage
 
 log = logging.getLogger(__name__)
@@ -113,14 +112,7 @@ class Listeners:
             self.link.unsubscribe(self.topic.name, holder=HOLDER)
 
 
-_listeners: weakref.WeakKeyDictionary[RobotLink, Listeners] = weakref.WeakKeyDictionary()
-
-
-def listeners_of(link: RobotLink) -> Listeners:
-    found = _listeners.get(link)
-    if found is None:
-        found = _listeners[link] = Listeners(link)
-    return found
+listeners_of = one_per_link(Listeners)
 
 
 def chunk_bytes(msg: dict[str, Any]) -> bytes:

@@ -13,8 +13,9 @@ import logging
 import re
 import threading
 import time
+import weakref
 from collections.abc import Awaitable, Callable, Iterable
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 from urllib.parse import urlsplit
 
 import roslibpy
@@ -42,6 +43,8 @@ if TYPE_CHECKING:
     from robot.link.lease import Lease
 
 log = logging.getLogger(__name__)
+
+T = TypeVar("T")
 
 # While the robot is away, how often to look whether rosbridge's port is listening again.
 PORT_WATCH_S = 0.2
@@ -583,6 +586,19 @@ def _close_quietly(ros: roslibpy.Ros) -> None:
         ros.close(timeout=2)
     except Exception:
         log.debug("close of the rosbridge connection did not complete", exc_info=True)
+
+
+def one_per_link(make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
+    """``make(link)`` once for each link, kept for as long as the link lives."""
+    made: weakref.WeakKeyDictionary[RobotLink, T] = weakref.WeakKeyDictionary()
+
+    def of(link: RobotLink) -> T:
+        found = made.get(link)
+        if found is None:
+            found = made[link] = make(link)
+        return found
+
+    return of
 
 
 # The link hosted by this process, if any (embedded default, robotlink command, tests).

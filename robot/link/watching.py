@@ -18,14 +18,13 @@ import asyncio
 import itertools
 import logging
 import time
-import weakref
 from typing import Any
 
 import numpy as np
 from django.conf import settings
 
 from robot import interface as ri
-from robot.link.connection import RobotLink, register_operation, register_start
+from robot.link.connection import RobotLink, one_per_link, register_operation, register_start
 from robot.live.announce import aannounce
 from robot.live.fanout import Coalescer
 from robot.live.groups import LinkReply, LinkRequest, TopicUpdate
@@ -211,14 +210,7 @@ def _bulky(msg: dict[str, Any]) -> bool:
     return any(isinstance(v, list | str | np.ndarray) and len(v) > BULKY_ITEMS for v in msg.values())
 
 
-_watches: weakref.WeakKeyDictionary[RobotLink, Watches] = weakref.WeakKeyDictionary()
-
-
-def watches_of(link: RobotLink) -> Watches:
-    found = _watches.get(link)
-    if found is None:
-        found = _watches[link] = Watches(link)
-    return found
+watches_of = one_per_link(Watches)
 
 
 def _refusal(exc: Refused) -> LinkReply:
