@@ -111,10 +111,15 @@ stop() {
   done
 }
 
-ours() {  # pid: is it alive and one of this stack's processes? (nginx rewrites its environment block)
+# pid: is it alive and one of this stack's processes? nginx rewrites its environment block, so its
+# command line says (its own arguments, or the one-line title it writes over them). grep reads the
+# files itself: behind a pipe, with pipefail, a writer that outlived grep -q's early exit (SIGPIPE)
+# would make a live process look gone.
+ours() {
   [[ -r /proc/$1/environ ]] || return 1
-  tr '\0' '\n' 2>/dev/null <"/proc/$1/environ" | grep -qxF "CYBORG_STACK=$STACK_DIR" \
-    || tr '\0' ' ' 2>/dev/null <"/proc/$1/cmdline" | grep -qF -- "-p $STACK_DIR/nginx "
+  grep -qzxF -- "CYBORG_STACK=$STACK_DIR" "/proc/$1/environ" 2>/dev/null \
+    || grep -qzxF -- "$STACK_DIR/nginx" "/proc/$1/cmdline" 2>/dev/null \
+    || grep -qzF -- "-p $STACK_DIR/nginx " "/proc/$1/cmdline" 2>/dev/null
 }
 
 create_database() {
