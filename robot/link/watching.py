@@ -53,7 +53,9 @@ def is_echo_key(key: str) -> bool:
     return key.startswith(ECHO_PREFIX)
 
 
-class Refused(Exception):
+class TopicRefused(Exception):
+    """A topic nobody may watch: a bad name, none of the robot's, or the robot offline (``code`` says which)."""
+
     def __init__(self, code: str, message: str) -> None:
         super().__init__(message)
         self.code = code
@@ -91,7 +93,7 @@ class Watches:
         for name in wanted:
             try:
                 msg_type = await self.resolve(name)
-            except Refused as exc:
+            except TopicRefused as exc:
                 refused[name] = {"code": exc.code, "error": exc.message}
                 continue
             new = name not in self.leases
@@ -104,19 +106,19 @@ class Watches:
         return refused
 
     async def resolve(self, name: str) -> str:
-        """The topic's type from the robot (rosapi), cached; Refused when it is no topic of the robot's."""
+        """The topic's type from the robot (rosapi), cached; TopicRefused when it is no topic of the robot's."""
         problem = ri.topic_name_problem(name)
         if problem:
-            raise Refused("invalid", problem)
+            raise TopicRefused("invalid", problem)
         known = self.types.get(name)
         if known:
             return known
         reply = await self.link.call(ri.service("rosapi_topic_type"), {"topic": name})
         if not reply.get("ok"):
-            raise Refused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
+            raise TopicRefused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
         msg_type = str((reply.get("values") or {}).get("type") or "")
         if not msg_type:
-            raise Refused("not_found", f"The robot has no topic {name}")
+            raise TopicRefused("not_found", f"The robot has no topic {name}")
         self.types[name] = msg_type
         return msg_type
 
@@ -170,7 +172,7 @@ class Watches:
         else:
             reply = await self.link.call(ri.service("rosapi_topics"))
             if not reply.get("ok"):
-                raise Refused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
+                raise TopicRefused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
             values = reply.get("values") or {}
             names, types = list(values.get("topics") or []), list(values.get("types") or [])
             self.types.update({n: t for n, t in zip(names, types, strict=False) if t})
@@ -213,7 +215,7 @@ def _bulky(msg: dict[str, Any]) -> bool:
 watches_of = one_per_link(Watches)
 
 
-def _refusal(exc: Refused) -> LinkReply:
+def _refusal(exc: TopicRefused) -> LinkReply:
     return {"ok": False, "error_code": exc.code, "error": exc.message}
 
 
@@ -228,7 +230,7 @@ async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
 async def _list(link: RobotLink, request: LinkRequest) -> LinkReply:
     try:
         return {"ok": True, "values": await watches_of(link).listing()}
-    except Refused as exc:
+    except TopicRefused as exc:
         return _refusal(exc)
 
 
@@ -237,7 +239,7 @@ async def _rate(link: RobotLink, request: LinkRequest) -> LinkReply:
     window = min(high, max(low, float(request.get("window_s") or 2.0)))
     try:
         return {"ok": True, "values": await watches_of(link).rate(str(request.get("topic") or ""), window)}
-    except Refused as exc:
+    except TopicRefused as exc:
         return _refusal(exc)
 
 

@@ -19,19 +19,12 @@ from typing import Any
 
 from robot import interface as ri
 from robot.link.bus import RobotError, RobotOffline, arequest
-from robot.link.watching import WATCH_RENEW_S
+from robot.link.watching import WATCH_RENEW_S, TopicRefused
 from robot.supervisor import supervise
 
 log = logging.getLogger(__name__)
 
 SYNC_TIMEOUT_S = 3.0
-
-
-class TopicRefused(Exception):
-    def __init__(self, code: str, message: str) -> None:
-        super().__init__(message)
-        self.code = code
-        self.message = message
 
 
 class LocalWatches:
