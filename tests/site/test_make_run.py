@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import http.cookiejar
 import json
 import os
@@ -53,8 +54,11 @@ def test_make_run_with_other_ports_connects_to_the_simulator_it_started():
         env.update({name: str(port) for name, port in ports.items()}, VAR_DIR=tmp)
         log = Path(tmp) / "make.log"
         with log.open("w") as out:
+            # As from a terminal: Ctrl-C must work even when this suite runs where SIGINT is ignored (a
+            # script's background job), which every process below would inherit.
             make = subprocess.Popen(["make", "--no-print-directory", "run"], cwd=ROOT, env=env, stdout=out,
-                                    stderr=subprocess.STDOUT, start_new_session=True)
+                                    stderr=subprocess.STDOUT, start_new_session=True,
+                                    preexec_fn=functools.partial(signal.signal, signal.SIGINT, signal.SIG_DFL))
         try:
             wait_for_port(ports["PORT"], timeout=120, proc=make)
             deadline = time.monotonic() + 30
@@ -83,7 +87,7 @@ def test_make_run_with_other_ports_connects_to_the_simulator_it_started():
             except subprocess.TimeoutExpired:
                 os.killpg(make.pid, signal.SIGKILL)
                 make.wait(5)
-                pytest.fail("make run did not stop on Ctrl-C")
+                pytest.fail(f"make run did not stop on Ctrl-C:\n{log.read_text()[-3000:]}")
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline and any(_listening(p) for p in ports.values()):
             time.sleep(0.1)
