@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import logging
+import time
 from collections.abc import Awaitable, Callable
 
 from channels.layers import get_channel_layer
@@ -65,10 +66,14 @@ async def start_link(
     return link, tasks
 
 
-async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: float = 10.0) -> None:
+async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: float = 4.0) -> None:
     """Stop the background services first and let them finish (the recorder flushes), then the link."""
+    started = time.monotonic()
     await cancel_within(tasks, timeout)
+    services_done = time.monotonic()
     await link.stop()
+    log.info("robot link stopped: background services in %.2f s, then the link in %.2f s",
+             services_done - started, time.monotonic() - services_done)
     if link_module.current is link:
         link_module.current = None
 

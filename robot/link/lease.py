@@ -109,6 +109,7 @@ class Lease:
         self._valid_until = 0.0
         try:
             await self.lock.release()
+            log.info("robot link %s released its lease", self.holder)
         except (LockError, RedisError):
             pass  # expired or taken meanwhile: nothing to hand over
 

@@ -104,12 +104,14 @@ class Topology:
     def url(self) -> str:
         return f"https://localhost:{self.https_port}"
 
-    def script(self, command: str, timeout: float = 180) -> None:
+    def script(self, command: str, timeout: float = 180) -> str:
+        """Run stack.sh; what it said on stderr (e.g. that a process ignored SIGTERM and was killed)."""
         out = subprocess.run(["bash", "scripts/stack.sh", *command.split()], cwd=ROOT, env=self.env,
                              capture_output=True, text=True, timeout=timeout)
         if out.returncode != 0:
             raise RuntimeError(f"stack.sh {command} exited with {out.returncode}:\n{out.stdout[-2000:]}\n"
                                f"{out.stderr[-3000:]}\n{self.logs()}")
+        return out.stderr
 
     def up(self) -> Topology:
         self.script("up")

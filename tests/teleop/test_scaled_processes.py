@@ -33,6 +33,7 @@ def scaled():
     redis = PrivateRedis().start()
     # A dead driver's lock frees quickly, so the next test can drive.
     stack = Stack(redis_url=redis.url, env={"TELEOP_LOCK_TTL_S": "1"})
+    stack.redis = redis
     try:
         stack.start()
         stack.wait_robot_online(timeout=40)
@@ -63,6 +64,12 @@ async def hold_w(stack: Stack, seconds: float, *, during=None) -> None:
         except Exception:
             if during is None:
                 raise  # the web process went away under us: expected only when we killed it
+
+
+def _wait_link_running(stack: Stack) -> None:
+    """Until the link says it runs, its signal handlers in place (the store may still show the previous
+    link online, so wait_robot_online can return before it)."""
+    wait_until(lambda: "Ctrl-C to stop." in stack.log("link"), timeout=30)
 
 
 def restart_web(stack: Stack) -> None:
@@ -122,9 +129,37 @@ def test_a_sigtermed_link_sends_zero_before_exiting(scaled):
         os.kill(scaled.link_proc.pid, signal.SIGTERM)
         scaled.link_proc.wait(15)
 
-    before = len(received(scaled))
+    before, logged = len(received(scaled)), len(scaled.log("link"))
     asyncio.run(hold_w(scaled, 1.0, during=term_link))
     twists = received(scaled)[before:]
     assert twists and not moving(twists[-1]), "the link exited leaving the robot moving"
+    said = scaled.log("link")[logged:]
+    assert scaled.link_proc.returncode == 0, said
+    assert "robot link stopped: background services in" in said and "Robot link stopped." in said, said
+    scaled.start_link()
+    scaled.wait_robot_online(timeout=30)
+
+
+def test_a_link_whose_stop_overruns_its_deadline_exits_with_every_threads_stack_in_its_log(scaled):
+    _wait_link_running(scaled)
+    scaled.link_proc.terminate()
+    assert scaled.link_proc.wait(15) == 0
+    scaled.env["ROBOT_LINK_STOP_DEADLINE_S"] = "0.3"
+    try:
+        scaled.start_link()  # a new log
+        _wait_link_running(scaled)
+    finally:
+        del scaled.env["ROBOT_LINK_STOP_DEADLINE_S"]
+    logged = len(scaled.log("link"))
+    # Redis frozen: the stop's hand-over waits on it (each wait bounded at a second or more), past the deadline.
+    scaled.redis.proc.send_signal(signal.SIGSTOP)
+    try:
+        os.kill(scaled.link_proc.pid, signal.SIGTERM)
+        returncode = scaled.link_proc.wait(15)
+    finally:
+        scaled.redis.proc.send_signal(signal.SIGCONT)
+    said = scaled.log("link")[logged:]
+    assert returncode == 1, said
+    assert "its stop overran 0.3 s; exiting" in said and "Thread MainThread:" in said, said
     scaled.start_link()
     scaled.wait_robot_online(timeout=30)

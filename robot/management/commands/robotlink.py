@@ -1,7 +1,11 @@
 import asyncio
+import logging
 import os
 import signal
 import socket
+import sys
+import threading
+import traceback
 from collections.abc import Awaitable
 from typing import Any
 
@@ -13,6 +17,7 @@ from robot.link.lease import Lease
 from robot.live.state import redis_key
 
 LEASE_KEY = "link-lease"
+log = logging.getLogger(__name__)
 
 
 class Command(BaseCommand):
@@ -21,20 +26,31 @@ class Command(BaseCommand):
 
     def handle(self, *args: Any, **options: Any) -> None:
         asyncio.run(self._run())
+        self._say("Robot link stopped.")
+
+    def _say(self, line: str) -> None:
+        self.stdout.write(line)
+        self.stdout.flush()  # a log file is block-buffered: a line must be there even if the process is killed
+
+    def _stop_requested(self, stop: asyncio.Event) -> None:
+        if not stop.is_set():
+            deadline = settings.ROBOT_LINK_STOP_DEADLINE_S
+            log.info("robot link: stop requested; exiting within %g s", deadline)
+            _exit_unless_done_within(deadline)
+            stop.set()
 
     async def _run(self) -> None:
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, stop.set)
+            loop.add_signal_handler(sig, self._stop_requested, stop)
         if not settings.REDIS_URL:
             link, tasks = await start_link(embedded=False)
-            self.stdout.write(f"Robot link running for {link.url}; Ctrl-C to stop.")
+            self._say(f"Robot link running for {link.url}; Ctrl-C to stop.")
             await stop.wait()
             await stop_link(link, tasks)
         else:
             await self._run_leased(stop)
-        self.stdout.write("Robot link stopped.")
 
     async def _run_leased(self, stop: asyncio.Event) -> None:
         """Standby until this process holds the lease, active while it does, standby again if it loses it."""
@@ -42,11 +58,11 @@ class Command(BaseCommand):
         lease = Lease(settings.REDIS_URL, redis_key(LEASE_KEY), holder=name, ttl_s=settings.ROBOT_LINK_LEASE_S)
         try:
             while not stop.is_set():
-                self.stdout.write(f"Robot link {name}: standby, waiting for the lease.")
+                self._say(f"Robot link {name}: standby, waiting for the lease.")
                 if not await _first(lease.acquire(), stop.wait()):
                     break
                 link, tasks = await start_link(embedded=False, lease=lease)
-                self.stdout.write(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
+                self._say(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
                 await _first(lease.hold(), stop.wait())
                 if lease.held:
                     # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
@@ -62,6 +78,22 @@ class Command(BaseCommand):
         finally:
             await lease.release()
             await lease.close()
+
+
+def _exit_unless_done_within(seconds: float) -> None:
+    """Past ``seconds``: every thread's stack to the log, then exit, rather than be killed without a word."""
+
+    def overran() -> None:
+        names = {thread.ident: thread.name for thread in threading.enumerate()}
+        stacks = "".join(f"\nThread {names.get(ident, ident)}:\n{''.join(traceback.format_stack(frame))}"
+                         for ident, frame in sys._current_frames().items())
+        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s", seconds, stacks)
+        sys.stdout.flush()
+        os._exit(1)
+
+    watchdog = threading.Timer(seconds, overran)
+    watchdog.daemon = True
+    watchdog.start()
 
 
 async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
