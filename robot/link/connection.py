@@ -21,6 +21,7 @@ from urllib.parse import urlsplit
 import roslibpy
 
 from robot import interface as ri
+from robot.bounded import cancel_within, within
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos
@@ -198,10 +199,10 @@ class RobotLink:
                 if self.request_queue:
                     await self._wake_list_pop()
                 else:
-                    await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
+                    await within(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
                 # The loop ends at the stop message, or after its current pop (a Redis list pop returns
                 # within a second) if another link on the list took the message: a request it took is served.
-                await asyncio.wait_for(asyncio.shield(self._serving), redisqueue.POP_TIMEOUT_S + 1)
+                await within(asyncio.shield(self._serving), redisqueue.POP_TIMEOUT_S + 1)
             except (TimeoutError, Exception):
                 log.warning("robot link request loop did not stop in time")
         if self._inflight:
@@ -219,13 +220,16 @@ class RobotLink:
                 topic.reconnect_on_close = False
             ros.factory.stopTrying()
             if ros.is_connected:
-                await asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros)
+                try:
+                    await within(asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros), 3)
+                except TimeoutError:
+                    log.warning("the rosbridge connection did not close in time; going on")
         await cancel_within(list(self._inflight), 1)
         self.connected = False
 
     async def _wake_list_pop(self) -> None:
         try:
-            await asyncio.wait_for(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
+            await within(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
         except Exception:
             log.debug("could not wake the request loop; it stops after its current pop", exc_info=True)
 
@@ -570,15 +574,6 @@ class RobotLink:
         if ok:
             return {"ok": True, "values": value}
         return {"ok": False, "error_code": "failed", "error": str(value)}
-
-
-async def cancel_within(tasks: list, timeout: float) -> None:
-    for task in tasks:
-        task.cancel()
-    if tasks:
-        _, pending = await asyncio.wait(tasks, timeout=timeout)
-        if pending:
-            log.warning("%d robot link task(s) did not stop within %g s", len(pending), timeout)
 
 
 def _close_quietly(ros: roslibpy.Ros) -> None:

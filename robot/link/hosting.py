@@ -16,10 +16,11 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from cyborg_site.drain import daphne_reactor
+from robot.bounded import cancel_within, within
 from robot.link import connection as link_module
 from robot.link import redisqueue
 from robot.link.bus import aping_over_layer
-from robot.link.connection import RobotLink, cancel_within
+from robot.link.connection import RobotLink
 from robot.link.lease import Lease
 from robot.live.state import get_store
 from robot.supervisor import supervise
@@ -104,7 +105,7 @@ def _stop_robot_before_exit() -> object:
 
     async def stop() -> None:
         try:
-            stopped = await asyncio.wait_for(halt_all(), 2)
+            stopped = await within(halt_all(), 2)
             if stopped:
                 log.warning("shutting down: sent zero for %d driver(s)", stopped)
         except Exception:

@@ -161,5 +161,6 @@ def test_a_link_whose_stop_overruns_its_deadline_exits_with_every_threads_stack_
     said = scaled.log("link")[logged:]
     assert returncode == 1, said
     assert "its stop overran 0.3 s; exiting" in said and "Thread MainThread:" in said, said
+    assert "Stack for <Task" in said, said
     scaled.start_link()
     scaled.wait_robot_online(timeout=30)

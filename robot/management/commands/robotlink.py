@@ -12,6 +12,7 @@ from typing import Any
 from django.conf import settings
 from django.core.management.base import BaseCommand
 
+from robot.bounded import cancel_within, describe
 from robot.link.hosting import start_link, stop_link
 from robot.link.lease import Lease
 from robot.live.state import redis_key
@@ -36,7 +37,7 @@ class Command(BaseCommand):
         if not stop.is_set():
             deadline = settings.ROBOT_LINK_STOP_DEADLINE_S
             log.info("robot link: stop requested; exiting within %g s", deadline)
-            _exit_unless_done_within(deadline)
+            _exit_unless_done_within(deadline, asyncio.get_running_loop())
             stop.set()
 
     async def _run(self) -> None:
@@ -70,8 +71,7 @@ class Command(BaseCommand):
                     try:
                         await stop_link(link, tasks)
                     finally:
-                        renewing.cancel()
-                        await asyncio.gather(renewing, return_exceptions=True)
+                        await cancel_within([renewing], 1)
                         await lease.release()
                 else:
                     await stop_link(link, tasks)  # lost: the link publishes nothing more (fencing)
@@ -80,14 +80,16 @@ class Command(BaseCommand):
             await lease.close()
 
 
-def _exit_unless_done_within(seconds: float) -> None:
-    """Past ``seconds``: every thread's stack to the log, then exit, rather than be killed without a word."""
+def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:
+    """Past ``seconds``: every thread's stack and every task's on ``loop`` to the log, then exit, rather
+    than be killed without a word."""
 
     def overran() -> None:
         names = {thread.ident: thread.name for thread in threading.enumerate()}
         stacks = "".join(f"\nThread {names.get(ident, ident)}:\n{''.join(traceback.format_stack(frame))}"
                          for ident, frame in sys._current_frames().items())
-        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s", seconds, stacks)
+        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s\nWhat each task awaited:%s",
+                  seconds, stacks, _task_stacks(loop))
         sys.stdout.flush()
         os._exit(1)
 
@@ -96,11 +98,19 @@ def _exit_unless_done_within(seconds: float) -> None:
     watchdog.start()
 
 
+def _task_stacks(loop: asyncio.AbstractEventLoop) -> str:
+    """From another thread: the loop runs on meanwhile, so its set of tasks may change while read."""
+    for _ in range(3):
+        try:
+            return describe(asyncio.all_tasks(loop))
+        except RuntimeError:
+            continue
+    return " (changing too fast to read)"
+
+
 async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
     """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first."""
     main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
     done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)
-    for task in pending:
-        task.cancel()
-    await asyncio.gather(*pending, return_exceptions=True)
+    await cancel_within(pending, 2)
     return main_task in done
