@@ -55,7 +55,11 @@ async def start_link(
                         "deadman_s": settings.TELEOP_LINK_DEADMAN_S},
         lease=lease,
     )
-    await link.start()
+    try:
+        await link.start()
+    except BaseException:
+        await link.stop()  # what it had started (a rosbridge connection, its loops) goes with it
+        raise
     link_module.current = link
     tasks = [supervise("link.command-path", functools.partial(probe_command_path, link))]
     tasks += [

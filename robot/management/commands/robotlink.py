@@ -18,6 +18,7 @@ from robot.link.lease import Lease
 from robot.live.state import redis_key
 
 LEASE_KEY = "link-lease"
+RETRY_AFTER_FAILURE_S = 1.0
 log = logging.getLogger(__name__)
 
 
@@ -54,7 +55,8 @@ class Command(BaseCommand):
             await self._run_leased(stop)
 
     async def _run_leased(self, stop: asyncio.Event) -> None:
-        """Standby until this process holds the lease, active while it does, standby again if it loses it."""
+        """Standby until this process holds the lease, active while it does, standby again if it loses
+        it, or if its time as the holder failed (its link stopped, the lease released, all logged)."""
         name = settings.ROBOT_LINK_NAME or f"{socket.gethostname()}-{os.getpid()}"
         lease = Lease(settings.REDIS_URL, redis_key(LEASE_KEY), holder=name, ttl_s=settings.ROBOT_LINK_LEASE_S)
         try:
@@ -62,22 +64,31 @@ class Command(BaseCommand):
                 self._say(f"Robot link {name}: standby, waiting for the lease.")
                 if not await _first(lease.acquire(), stop.wait()):
                     break
-                link, tasks = await start_link(embedded=False, lease=lease)
-                self._say(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
-                await _first(lease.hold(), stop.wait())
-                if lease.held:
-                    # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
-                    renewing = asyncio.ensure_future(lease.hold())
-                    try:
-                        await stop_link(link, tasks)
-                    finally:
-                        await cancel_within([renewing], 1)
-                        await lease.release()
-                else:
-                    await stop_link(link, tasks)  # lost: the link publishes nothing more (fencing)
+                try:
+                    await self._hold(lease, stop, name)
+                except Exception:
+                    log.exception("robot link %s: its time as the holder failed; standby again", name)
+                    await lease.release()
+                    await _first(asyncio.sleep(RETRY_AFTER_FAILURE_S), stop.wait())
         finally:
             await lease.release()
             await lease.close()
+
+    async def _hold(self, lease: Lease, stop: asyncio.Event, name: str) -> None:
+        """Active until the lease is lost or a stop is asked for; then the link stops."""
+        link, tasks = await start_link(embedded=False, lease=lease)
+        self._say(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
+        await _first(lease.hold(), stop.wait())
+        if not lease.held:
+            await stop_link(link, tasks)  # lost: the link publishes nothing more (fencing)
+            return
+        # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
+        renewing = asyncio.ensure_future(lease.hold())
+        try:
+            await stop_link(link, tasks)
+        finally:
+            await cancel_within([renewing], 1)
+            await lease.release()
 
 
 def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:

@@ -1,0 +1,74 @@
+"""The robotlink command's rounds as the holder: a round that fails (its link would not start, Redis
+restarting under it) is logged, hands the lease back and ends in standby, never in a dead process;
+a link that fails to start leaves nothing of itself running."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import types
+
+import pytest
+from django.conf import settings
+from redis.exceptions import ConnectionError as RedisConnectionError
+
+from robot.link import hosting
+from robot.link.connection import RobotLink
+from robot.management.commands import robotlink
+from tests.support_processes import PrivateRedis
+
+
+@pytest.fixture
+def private_redis(settings):
+    server = PrivateRedis().start()
+    settings.REDIS_URL = server.url
+    settings.ROBOT_LINK_LEASE_S = 0.5
+    yield server
+    server.stop()
+
+
+@pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")
+async def test_a_round_whose_link_fails_to_start_is_logged_and_the_link_stands_by_again(
+        private_redis, monkeypatch, caplog):
+    stop = asyncio.Event()
+    held_at_start: list[bool] = []
+    stopped: list[object] = []
+    link = types.SimpleNamespace(url="ws://robot")
+
+    async def start_link(*, embedded: bool, lease) -> tuple[object, list]:
+        held_at_start.append(lease.held)
+        if len(held_at_start) == 1:
+            raise RedisConnectionError("Connection closed by server.")
+        stop.set()  # the second round starts: then a stop (SIGTERM)
+        return link, []
+
+    async def stop_link(stopping, tasks) -> None:
+        stopped.append(stopping)
+
+    monkeypatch.setattr(robotlink, "start_link", start_link)
+    monkeypatch.setattr(robotlink, "stop_link", stop_link)
+    monkeypatch.setattr(robotlink, "RETRY_AFTER_FAILURE_S", 0.1)
+    with caplog.at_level(logging.INFO):
+        await asyncio.wait_for(robotlink.Command()._run_leased(stop), 30)
+
+    assert held_at_start == [True, True], "each round started only while holding the lease"
+    assert stopped == [link], "the round that started was stopped cleanly"
+    assert "its time as the holder failed; standby again" in caplog.text
+    assert "Connection closed by server." in caplog.text
+    assert caplog.text.count("released its lease") >= 2, "the failed round handed the lease back"
+
+
+async def test_a_link_that_fails_to_start_is_stopped_before_the_error_goes_on(monkeypatch):
+    stopped: list[RobotLink] = []
+
+    async def start(self: RobotLink, **_: object) -> None:
+        raise RedisConnectionError("Connection closed by server.")
+
+    async def stop(self: RobotLink) -> None:
+        stopped.append(self)
+
+    monkeypatch.setattr(RobotLink, "start", start)
+    monkeypatch.setattr(RobotLink, "stop", stop)
+    with pytest.raises(RedisConnectionError):
+        await hosting.start_link(embedded=False)
+    assert len(stopped) == 1, "what the link had started (a rosbridge connection, its loops) is left running"
