@@ -53,7 +53,7 @@ async def test_a_round_whose_link_fails_to_start_is_logged_and_the_link_stands_b
 
     assert held_at_start == [True, True], "each round started only while holding the lease"
     assert stopped == [link], "the round that started was stopped cleanly"
-    assert "its time as the holder failed; standby again" in caplog.text
+    assert "failed; standby again" in caplog.text
     assert "Connection closed by server." in caplog.text
     assert caplog.text.count("released its lease") >= 2, "the failed round handed the lease back"
 
@@ -72,3 +72,11 @@ async def test_a_link_that_fails_to_start_is_stopped_before_the_error_goes_on(mo
     with pytest.raises(RedisConnectionError):
         await hosting.start_link(embedded=False)
     assert len(stopped) == 1, "what the link had started (a rosbridge connection, its loops) is left running"
+
+
+async def test_the_wait_for_the_lease_or_a_stop_passes_on_the_error_of_what_it_waited_for():
+    async def fails() -> None:
+        raise RedisConnectionError("Connection closed by server.")
+
+    with pytest.raises(RedisConnectionError):
+        await robotlink._first(fails(), asyncio.Event().wait())

@@ -56,18 +56,18 @@ class Command(BaseCommand):
 
     async def _run_leased(self, stop: asyncio.Event) -> None:
         """Standby until this process holds the lease, active while it does, standby again if it loses
-        it, or if its time as the holder failed (its link stopped, the lease released, all logged)."""
+        it, or after a failure (logged; its link stopped, the lease released)."""
         name = settings.ROBOT_LINK_NAME or f"{socket.gethostname()}-{os.getpid()}"
         lease = Lease(settings.REDIS_URL, redis_key(LEASE_KEY), holder=name, ttl_s=settings.ROBOT_LINK_LEASE_S)
         try:
             while not stop.is_set():
                 self._say(f"Robot link {name}: standby, waiting for the lease.")
-                if not await _first(lease.acquire(), stop.wait()):
-                    break
                 try:
+                    if not await _first(lease.acquire(), stop.wait()):
+                        break
                     await self._hold(lease, stop, name)
                 except Exception:
-                    log.exception("robot link %s: its time as the holder failed; standby again", name)
+                    log.exception("robot link %s failed; standby again", name)
                     await lease.release()
                     await _first(asyncio.sleep(RETRY_AFTER_FAILURE_S), stop.wait())
         finally:
@@ -124,4 +124,7 @@ async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
     main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
     done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)
     await cancel_within(pending, 2)
-    return main_task in done
+    if main_task in done:
+        main_task.result()  # its error, if it failed, is the caller's
+        return True
+    return False
