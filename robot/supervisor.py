@@ -43,6 +43,14 @@ def stop_requested() -> bool:
     return task is not None and task.cancelling() > 0
 
 
+def end_if_cancelled() -> None:
+    """End the running task if it was cancelled, for a loop to call each round: Python 3.11's
+    ``wait_for`` (inside redis-py's writes, for one) can return normally in a task cancelled just
+    then, the cancellation lost, and the loop would go on for ever."""
+    if stop_requested():
+        raise asyncio.CancelledError
+
+
 def supervise(
     name: str,
     factory: Callable[[], Awaitable[None]],

@@ -38,7 +38,7 @@ from robot.live.groups import (
     TopicUpdate,
 )
 from robot.live.state import LINK_HEARTBEAT_S, StateStore
-from robot.supervisor import failing, supervise
+from robot.supervisor import end_if_cancelled, failing, supervise
 
 if TYPE_CHECKING:
     from robot.link.lease import Lease
@@ -381,6 +381,7 @@ class RobotLink:
     async def _heartbeat(self) -> None:
         while not self._stopped:
             await asyncio.sleep(LINK_HEARTBEAT_S)
+            end_if_cancelled()
             # Failed connection attempts emit no "close"; count them from the factory.
             if self.ros is not None and not self.connected:
                 self.attempts = max(self.attempts, getattr(self.ros.factory, "retries", 0))
@@ -460,6 +461,7 @@ class RobotLink:
 
     async def _serve(self) -> None:
         while not self._stopped:
+            end_if_cancelled()
             if self.request_queue:
                 request = await redisqueue.pop(self.request_queue)
                 if request is None:

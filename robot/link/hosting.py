@@ -23,7 +23,7 @@ from robot.link.bus import aping_over_layer
 from robot.link.connection import RobotLink
 from robot.link.lease import Lease
 from robot.live.state import get_store
-from robot.supervisor import supervise
+from robot.supervisor import end_if_cancelled, supervise
 
 log = logging.getLogger(__name__)
 
@@ -87,6 +87,7 @@ async def probe_command_path(link: RobotLink) -> None:
     """Ping the link over the request channel every web process uses, and say what it found
     in the link's status: a dead request loop or channel layer shows as "command path down"."""
     while True:
+        end_if_cancelled()
         await link.set_command_path(await aping_over_layer(PROBE_TIMEOUT_S))
         await asyncio.sleep(PROBE_INTERVAL_S)
 

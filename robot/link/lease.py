@@ -18,7 +18,7 @@ import redis.asyncio
 from redis.asyncio.lock import Lock
 from redis.exceptions import LockError, LockNotOwnedError, RedisError
 
-from robot.supervisor import stop_requested
+from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,7 @@ class Lease:
     async def acquire(self) -> None:
         """Wait (as the standby) until this process holds the lease."""
         while True:
+            end_if_cancelled()
             if self._redis_down:
                 # Redis is back, maybe empty after a restart: leave the holder a lease's time to take its
                 # key back, so a Redis restart does not move the robot to the other link.
@@ -72,6 +73,7 @@ class Lease:
         """Renew the lease until it is lost; returns then (``lost`` is set)."""
         while self.held:
             await asyncio.sleep(self.renew_s)
+            end_if_cancelled()
             started = time.monotonic()
             try:
                 await self.lock.reacquire()

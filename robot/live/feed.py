@@ -22,7 +22,7 @@ from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
 from robot.live.state import get_store, redis_key
-from robot.supervisor import stop_requested
+from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -119,11 +119,13 @@ async def run_subscriber(hub: Hub) -> None:
     subscribed_before = False
     lost_at: float | None = None
     while True:
+        end_if_cancelled()
         client = redis.asyncio.Redis.from_url(settings.REDIS_URL, client_name=SUBSCRIBER_NAME)
         try:
             async with client.pubsub() as pubsub:
                 await pubsub.subscribe(channel())
                 async for message in pubsub.listen():
+                    end_if_cancelled()
                     kind = message.get("type")
                     if kind == "message":
                         try:

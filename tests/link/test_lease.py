@@ -110,3 +110,28 @@ async def test_after_redis_restarts_empty_the_holder_takes_its_lease_back(leases
     waiting.cancel()
     renewing.cancel()
     await asyncio.gather(waiting, renewing, return_exceptions=True)
+
+
+async def test_a_renewing_holder_ends_when_cancelled_even_if_a_renewal_swallowed_the_cancellation(leases):
+    """Python 3.11's wait_for, inside redis-py's writes, returns normally in a task cancelled at the
+    wrong moment (measured: 145 of 3,000 cancellations of a renewal). The stand-in does that each time."""
+    lease = leases("link-a")
+    await lease.acquire()
+    real_reacquire = lease.lock.reacquire
+    renewing = asyncio.Event()
+
+    async def swallowing_reacquire() -> bool:
+        renewing.set()
+        try:
+            await asyncio.sleep(0.2)
+        except asyncio.CancelledError:
+            pass  # the lost cancellation
+        return await real_reacquire()
+
+    lease.lock.reacquire = swallowing_reacquire
+    holding = asyncio.ensure_future(lease.hold())
+    await asyncio.wait_for(renewing.wait(), 5)
+    holding.cancel()
+    done, _ = await asyncio.wait({holding}, timeout=2)
+    assert done, "the holder renewed on, its stop lost (the link's stop hung here)"
+    assert holding.cancelled()
