@@ -1,10 +1,11 @@
 """Waits that end on time even when what they wait on ignores its cancellation.
 
 ``asyncio.wait_for`` and ``gather`` after ``cancel()`` wait until the cancelled task has really
-ended. A library that turns a ``CancelledError`` into an error of its own and carries on (a
-Redis client in the middle of a read) then holds its caller for as long as it likes, and a
-stop that must zero the robot, flush and hand over waits with it. These waits cancel, wait
-a bounded time, and go on, naming what did not end.
+ended. A task whose cancellation was lost (a library turned it into an error of its own and
+carried on; Python 3.11's own ``wait_for``, inside redis-py's writes, can return normally in a
+task cancelled just then) holds its caller for as long as it runs, and a stop that must zero
+the robot, flush and hand over waits with it. These waits cancel, wait a bounded time, and go
+on, naming what did not end.
 """
 
 from __future__ import annotations

@@ -14,6 +14,7 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 
 from robot.link import hosting
 from robot.link.connection import RobotLink
+from robot.link.lease import Lease
 from robot.management.commands import robotlink
 from tests.support_processes import PrivateRedis
 
@@ -28,34 +29,43 @@ def private_redis(settings):
 
 
 @pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")
-async def test_a_round_whose_link_fails_to_start_is_logged_and_the_link_stands_by_again(
+async def test_failed_rounds_are_logged_and_the_link_stands_by_again_its_link_stopped(
         private_redis, monkeypatch, caplog):
+    """Round 1: the link fails to start. Round 2: it runs, then renewing the lease fails. Round 3: a stop."""
     stop = asyncio.Event()
     held_at_start: list[bool] = []
     stopped: list[object] = []
-    link = types.SimpleNamespace(url="ws://robot")
+    links = [types.SimpleNamespace(url=f"ws://robot/{n}") for n in range(3)]
+    real_hold = Lease.hold
 
-    async def start_link(*, embedded: bool, lease) -> tuple[object, list]:
+    async def start_link(*, embedded: bool, lease: Lease) -> tuple[object, list]:
         held_at_start.append(lease.held)
         if len(held_at_start) == 1:
             raise RedisConnectionError("Connection closed by server.")
-        stop.set()  # the second round starts: then a stop (SIGTERM)
-        return link, []
+        if len(held_at_start) == 3:
+            stop.set()
+        return links[len(held_at_start) - 1], []
 
-    async def stop_link(stopping, tasks) -> None:
-        stopped.append(stopping)
+    async def stop_link(link, tasks) -> None:
+        stopped.append(link)
+
+    async def hold(lease: Lease) -> None:
+        if len(held_at_start) == 2:
+            raise ValueError("a renewal that went wrong")
+        await real_hold(lease)
 
     monkeypatch.setattr(robotlink, "start_link", start_link)
     monkeypatch.setattr(robotlink, "stop_link", stop_link)
+    monkeypatch.setattr(Lease, "hold", hold)
     monkeypatch.setattr(robotlink, "RETRY_AFTER_FAILURE_S", 0.1)
     with caplog.at_level(logging.INFO):
         await asyncio.wait_for(robotlink.Command()._run_leased(stop), 30)
 
-    assert held_at_start == [True, True], "each round started only while holding the lease"
-    assert stopped == [link], "the round that started was stopped cleanly"
-    assert "failed; standby again" in caplog.text
-    assert "Connection closed by server." in caplog.text
-    assert caplog.text.count("released its lease") >= 2, "the failed round handed the lease back"
+    assert held_at_start == [True, True, True], "each round started only while holding the lease"
+    assert stopped == links[1:], "every link that started was stopped, the failed round's too"
+    assert caplog.text.count("failed; standby again") == 2
+    assert "Connection closed by server." in caplog.text and "a renewal that went wrong" in caplog.text
+    assert caplog.text.count("released its lease") >= 3, "each round handed the lease back"
 
 
 async def test_a_link_that_fails_to_start_is_stopped_before_the_error_goes_on(monkeypatch):

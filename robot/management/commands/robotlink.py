@@ -75,20 +75,23 @@ class Command(BaseCommand):
             await lease.close()
 
     async def _hold(self, lease: Lease, stop: asyncio.Event, name: str) -> None:
-        """Active until the lease is lost or a stop is asked for; then the link stops."""
+        """Active until the lease is lost, a stop is asked for or something fails; then the link stops."""
         link, tasks = await start_link(embedded=False, lease=lease)
         self._say(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
-        await _first(lease.hold(), stop.wait())
-        if not lease.held:
-            await stop_link(link, tasks)  # lost: the link publishes nothing more (fencing)
-            return
-        # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
-        renewing = asyncio.ensure_future(lease.hold())
+        renewing: asyncio.Future | None = None
         try:
-            await stop_link(link, tasks)
+            await _first(lease.hold(), stop.wait())
+            if lease.held:
+                # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
+                renewing = asyncio.ensure_future(lease.hold())
+            # Otherwise lost: the link publishes nothing more (fencing).
         finally:
-            await cancel_within([renewing], 1)
-            await lease.release()
+            try:
+                await stop_link(link, tasks)
+            finally:
+                if renewing is not None:
+                    await cancel_within([renewing], 1)
+                    await lease.release()
 
 
 def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:
