@@ -15,6 +15,8 @@ from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from robot.supervisor import end_if_cancelled
+
 log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
@@ -91,8 +93,8 @@ class Coalescer:
         self._wake.set()
 
     async def _drain(self) -> None:
-        # Exit on a flag, not only on cancellation: redis-py may turn a cancel into a
-        # ConnectionError, which the send's error handling would otherwise swallow.
+        # Exit on a flag, not only on cancellation: a send through redis-py may turn a cancel into
+        # a ConnectionError, which the error handling below would swallow, or lose it altogether.
         while not self._closed:
             await self._wake.wait()
             self._wake.clear()
@@ -102,6 +104,7 @@ class Coalescer:
                     await self._send(value)
                 except Exception:
                     log.exception("fan-out send failed")
+                end_if_cancelled()
 
     def close(self) -> None:
         self._closed = True

@@ -109,3 +109,24 @@ async def _offer_none_held_back(coalescer, sent: list, gaps: tuple[float, ...]) 
         for _ in range(3):
             await asyncio.sleep(0)
         assert sent == list(range(i + 1)), f"message {i} was held back"
+
+
+async def test_its_sender_ends_when_cancelled_even_if_a_send_lost_the_cancellation():
+    """A send through redis-py can return normally in a task cancelled just then (Python 3.11's wait_for);
+    the stand-in does so every time. The link's stop cancels the sender before closing it."""
+    sending = asyncio.Event()
+
+    async def send(value):
+        sending.set()
+        try:
+            await asyncio.sleep(0.2)
+        except asyncio.CancelledError:
+            pass  # the lost cancellation
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop())
+    coalescer.offer("pose", 10.0, 1)
+    await asyncio.wait_for(sending.wait(), 1)
+    coalescer._task.cancel()
+    done, _ = await asyncio.wait({coalescer._task}, timeout=1)
+    coalescer.close()
+    assert done, "the sender waited on for the next update, its stop lost"
