@@ -25,13 +25,12 @@ async def within(awaitable: Awaitable[T], timeout: float) -> T:
     """``awaitable``'s result, or TimeoutError after ``timeout`` seconds (it is cancelled, not waited for)."""
     task = asyncio.ensure_future(awaitable)
     try:
-        done, _ = await asyncio.wait({task}, timeout=timeout)
-    except BaseException:
-        task.cancel()
-        raise
-    if not done:
-        task.cancel()
-        task.add_done_callback(_forget)
+        await asyncio.wait({task}, timeout=timeout)
+    finally:
+        if not task.done():  # timed out, or the caller was cancelled
+            task.cancel()
+            task.add_done_callback(_forget)
+    if not task.done():
         raise TimeoutError(f"did not finish within {timeout:g} s")
     return task.result()
 

@@ -7,6 +7,7 @@ import asyncio
 import types
 
 from history.recorder import Recorder
+from tests.helpers import lose_cancellation
 
 
 async def test_a_cancelled_recorder_ends_and_flushes_even_if_a_store_write_lost_the_cancellation():
@@ -19,10 +20,7 @@ async def test_a_cancelled_recorder_ends_and_flushes_even_if_a_store_write_lost_
 
     async def publish_latest(store: object) -> None:
         writing.set()
-        try:
-            await asyncio.sleep(0.2)
-        except asyncio.CancelledError:
-            pass  # the lost cancellation
+        await lose_cancellation()
 
     async def flush() -> int:
         flushes.append("flush")

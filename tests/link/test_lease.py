@@ -11,7 +11,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.link.lease import Lease
-from tests.helpers import async_wait_until
+from tests.helpers import async_wait_until, lose_cancellation
 from tests.support_processes import PrivateRedis
 
 # Leases exist only when scaled: run with the services pass (on a redis-server of their own all the same).
@@ -122,10 +122,7 @@ async def test_a_renewing_holder_ends_when_cancelled_even_if_a_renewal_swallowed
 
     async def swallowing_reacquire() -> bool:
         renewing.set()
-        try:
-            await asyncio.sleep(0.2)
-        except asyncio.CancelledError:
-            pass  # the lost cancellation
+        await lose_cancellation()
         return await real_reacquire()
 
     lease.lock.reacquire = swallowing_reacquire

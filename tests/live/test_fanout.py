@@ -1,6 +1,7 @@
 import asyncio
 
 from robot.live.fanout import BURST, Coalescer
+from tests.helpers import lose_cancellation
 
 
 async def test_it_forwards_the_latest_value_at_the_ui_rate():
@@ -118,10 +119,7 @@ async def test_its_sender_ends_when_cancelled_even_if_a_send_lost_the_cancellati
 
     async def send(value):
         sending.set()
-        try:
-            await asyncio.sleep(0.2)
-        except asyncio.CancelledError:
-            pass  # the lost cancellation
+        await lose_cancellation()
 
     coalescer = Coalescer(send, loop=asyncio.get_running_loop())
     coalescer.offer("pose", 10.0, 1)

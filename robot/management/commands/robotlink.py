@@ -103,23 +103,13 @@ def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) ->
         stacks = "".join(f"\nThread {names.get(ident, ident)}:\n{''.join(traceback.format_stack(frame))}"
                          for ident, frame in sys._current_frames().items())
         log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s\nWhat each task awaited:%s",
-                  seconds, stacks, _task_stacks(loop))
+                  seconds, stacks, describe(asyncio.all_tasks(loop)))
         sys.stdout.flush()
         os._exit(1)
 
     watchdog = threading.Timer(seconds, overran)
     watchdog.daemon = True
     watchdog.start()
-
-
-def _task_stacks(loop: asyncio.AbstractEventLoop) -> str:
-    """From another thread: the loop runs on meanwhile, so its set of tasks may change while read."""
-    for _ in range(3):
-        try:
-            return describe(asyncio.all_tasks(loop))
-        except RuntimeError:
-            continue
-    return " (changing too fast to read)"
 
 
 async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
