@@ -105,9 +105,10 @@ async def track_smach(link: RobotLink, *, fresh_s: float = STATUS_FRESH_S) -> No
                 version = graph["version"]
                 await apublish_state(SMACH_GRAPH_KEY, graph)
             active = tracker.active(time.time())
-            if active is not None and active != shown:
+            # The version names the graph the active states are drawn on: a grown graph re-tells them.
+            if active is not None and (active := {**active, "version": version}) != shown:
                 shown = active
-                await apublish_state(SMACH_ACTIVE_KEY, {**active, "version": version})
+                await apublish_state(SMACH_ACTIVE_KEY, active)
     finally:
         link.listeners.remove(listener)
 

@@ -4,6 +4,7 @@ states (from introspection, or from state_change without it) and the diagnostics
 from __future__ import annotations
 
 import asyncio
+import time
 
 from robot import interface as ri
 from robot.introspection.tracking import track_diagnostics, track_smach
@@ -78,5 +79,41 @@ async def test_diagnostics_are_kept_by_component_and_a_level_change_shows_at_onc
         sim.call(lambda: sim.robot.publish_external(topic, _diagnostic("test: arm", 2, "jammed")))
         await async_wait_until(lambda: component("test: arm").get("level") == 2, timeout=10, what="arm error")
         assert stored(DIAGNOSTICS_KEY)["worst_name"] == "ERROR"
+    finally:
+        task.cancel()
+
+
+class _Listeners:
+    """All of the link that the trackers use: the list of message listeners."""
+
+    def __init__(self) -> None:
+        self.listeners: list = []
+
+    def hear(self, name: str, msg: dict) -> None:
+        for listener in list(self.listeners):
+            listener(name, "", msg, time.time())
+
+
+def _container(path: str, children: list[str]) -> dict:
+    return {"path": path, "children": children, "internal_outcomes": [], "outcomes_from": [],
+            "outcomes_to": [], "container_outcomes": []}
+
+
+async def test_a_grown_graph_re_tells_the_active_state_with_its_version():
+    link = _Listeners()
+    task = asyncio.ensure_future(track_smach(link))  # type: ignore[arg-type]
+    try:
+        await async_wait_until(lambda: link.listeners, timeout=5, what="the tracker listening")
+        link.hear(ri.topic("smach_structure").name, _container("/SM_ROOT", ["suspension", "behaviour"]))
+        link.hear(ri.topic("smach_status").name, {"path": "/SM_ROOT", "active_states": ["suspension"]})
+        await async_wait_until(lambda: leaves() == ["/SM_ROOT/suspension"], timeout=5, what="suspension")
+        first = stored(SMACH_GRAPH_KEY)["version"]
+        # Another container's structure arrives; the active state itself does not move.
+        link.hear(ri.topic("smach_structure").name, _container("/SM_ROOT/behaviour", ["idle"]))
+        await async_wait_until(lambda: stored(SMACH_GRAPH_KEY)["version"] != first, timeout=5, what="grown graph")
+        grown = stored(SMACH_GRAPH_KEY)["version"]
+        # Well within the 5 s after which the status would go stale and change the active state anyway.
+        await async_wait_until(lambda: stored(SMACH_ACTIVE_KEY)["version"] == grown, timeout=2,
+                               what="the active state on the grown graph")
     finally:
         task.cancel()
