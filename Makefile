@@ -1,5 +1,6 @@
 # Two commands for a fresh machine:  make run  and  make test.
-PY ?= python3
+# Python 3.12 or newer: found on PATH or in pyenv (scripts/find-python.sh says how to get one).
+PY ?= $(shell bash scripts/find-python.sh)
 VENV := .venv
 BIN := $(VENV)/bin
 PORT ?= 8000
@@ -12,10 +13,15 @@ STAMP := $(VENV)/.installed
 
 .PHONY: run test install browser nginx wrk stack stack-down lint bench clean
 
-$(STAMP): pyproject.toml
+# Installs exactly what requirements/dev.lock pins, with hashes. Upgrading is on purpose:
+#   .venv/bin/uv pip compile pyproject.toml --extra dev --generate-hashes --python-version 3.12 \
+#     --upgrade -o requirements/dev.lock
+$(STAMP): requirements/dev.lock requirements/bootstrap.lock
+	@test -n "$(PY)" || { echo "No Python 3.12 or newer: see above." >&2; exit 1; }
 	$(PY) -m venv $(VENV)
-	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q --disable-pip-version-check --require-hashes -r requirements/bootstrap.lock
+	$(BIN)/uv pip sync -q --python $(BIN)/python --require-hashes requirements/dev.lock
+	$(BIN)/uv pip install -q --python $(BIN)/python --no-deps --no-build-isolation -e .
 	touch $(STAMP)
 
 install: $(STAMP)

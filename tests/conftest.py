@@ -64,7 +64,7 @@ asyncio.runners._cancel_all_tasks = _cancel_all_tasks_naming_stragglers  # type:
 _shutdown_default_executor = asyncio.BaseEventLoop.shutdown_default_executor
 
 
-async def _shutdown_default_executor_naming_stragglers(self: asyncio.BaseEventLoop) -> None:
+async def _shutdown_default_executor_naming_stragglers(self: asyncio.BaseEventLoop, timeout: float | None = None) -> None:
     """The same clean-up's wait for the loop's worker threads, bounded: a call still blocked (say, a
     database write waiting on a lock the test's own transaction holds until after this) is named
     with its stack instead of hanging the run; it ends by itself once the transaction does."""
