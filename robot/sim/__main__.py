@@ -23,6 +23,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--startup-s", type=float, default=15.0)
     p.add_argument("--demo-s", type=float, default=30.0)
     p.add_argument("--mic-coding", default="wave", choices=list(MIC_CODINGS))
+    p.add_argument("--time-scale", type=float, default=1.0, help="the world runs this many times as fast")
     p.add_argument("--quiet", action="store_true", help="log warnings only")
     return p.parse_args(argv)
 
@@ -45,7 +46,7 @@ def main(argv: list[str] | None = None) -> None:
     logging.getLogger("websockets").setLevel(logging.WARNING)
     robot = SimRobot(host=a.host, port=a.port, video_port=a.video_port, map_name=a.map, seed=a.seed,
                      pose_rate_hz=a.pose_rate, startup_s=a.startup_s, demo_s=a.demo_s,
-                     mic_coding=a.mic_coding)
+                     mic_coding=a.mic_coding, time_scale=a.time_scale)
     asyncio.run(serve(robot, lambda line: print(line, flush=True)))
 
 

@@ -63,18 +63,36 @@ class Schedule:
 
 
 class Clock:
-    """The simulator's one tick: every node's per-tick step, then the periodic publishers that are due."""
+    """The simulator's one tick: every node's per-tick step, then the periodic publishers that are due.
 
-    def __init__(self) -> None:
+    Its time is the robot's world's: ``scale`` times as fast as the host's (motion, state timers,
+    navigation, the commander's pauses, publishing rates), so a test that waits on the robot moving
+    or a timer need not wait in real time. What stays in the host's time: the rosbridge protocol,
+    message stamps, and the publishers' rates (a faster world is not a chattier one)."""
+
+    def __init__(self, scale: float = 1.0) -> None:
+        if not scale > 0:
+            raise ValueError(f"time scale must be positive, not {scale}")
+        self.scale = scale
+        self._origin = time.monotonic()
         self.steps: list[TickFn] = []
         self.schedules: list[Schedule] = []
 
-    def tick(self, now: float, dt: float) -> None:
+    def now(self) -> float:
+        """The world's monotonic time, in seconds."""
+        return self._origin + (time.monotonic() - self._origin) * self.scale
+
+    async def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` of the world's time."""
+        await asyncio.sleep(seconds / self.scale)
+
+    def tick(self, now: float, dt: float, host_now: float) -> None:
+        """``now`` and ``dt`` in the world's time; ``host_now`` (monotonic) paces the publishers."""
         for step in self.steps:
             step(now, dt)
         for s in self.schedules:
-            if now >= s.due:
-                s.due = s.due + s.period if now - s.due < s.period else now + s.period
+            if host_now >= s.due:
+                s.due = s.due + s.period if host_now - s.due < s.period else host_now + s.period
                 s.fn()
 
 

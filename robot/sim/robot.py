@@ -71,6 +71,7 @@ class SimRobot:
         tick_hz: float = 50.0,
         mic_tone_hz: float = 440.0,
         mic_coding: str = "wave",
+        time_scale: float = 1.0,
     ) -> None:
         self.host = host
         self.port = port
@@ -81,7 +82,7 @@ class SimRobot:
         self._world = build(map_name, seed)
         x, y, yaw = self._world.start
         self.body = Base(self._world, x, y, yaw)
-        self.clock = Clock()
+        self.clock = Clock(time_scale)
         self._broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
         self.bus = Bus(self._broker, self.clock)
         for t in ri.topics():
@@ -153,18 +154,18 @@ class SimRobot:
         tasks.clear()
 
     async def _tick_loop(self) -> None:
-        last = time.monotonic()
-        next_t = last
+        last = self.clock.now()
+        next_t = time.monotonic()
         while True:
             next_t += self.tick_s
             delay = next_t - time.monotonic()
             if delay < -1.0:  # fell far behind (host paused): do not try to catch up
                 next_t = time.monotonic()
             await asyncio.sleep(max(0.0, delay))
-            now = time.monotonic()
-            dt, last = min(now - last, 0.2), now
+            now = self.clock.now()
+            dt, last = min(now - last, 0.2 * self.clock.scale), now
             try:
-                self.clock.tick(now, dt)
+                self.clock.tick(now, dt, time.monotonic())
             except Exception:
                 log.exception("simulator tick failed")
 

@@ -17,6 +17,7 @@ from websockets.sync.client import connect
 
 from robot import interface as ri
 from robot.sim import SimThread, messages, statemachine, world
+from robot.sim.bus import Clock
 from tests.sim.support import Raw, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -171,3 +172,20 @@ def test_it_lets_roslibpy_reconnect_and_resubscribe_after_a_restart_on_the_same_
                        what="roslibpy re-subscribed")
     finally:
         ros.close()
+
+
+def test_a_scaled_clock_runs_the_worlds_time_that_many_times_as_fast():
+    clock = Clock(scale=8.0)
+    host_before, world_before = time.monotonic(), clock.now()
+    time.sleep(0.05)
+    world_after, host_after = clock.now(), time.monotonic()
+    assert 8.0 * 0.05 <= world_after - world_before <= 8.0 * (host_after - host_before)
+    with pytest.raises(ValueError):
+        Clock(scale=0)
+
+
+def test_a_scaled_world_ends_its_timers_sooner_in_the_hosts_time():
+    # Start-up takes 4 s of the world's time: at 8 times the pace, well under the 2 s waited here.
+    with SimThread(startup_s=4.0, time_scale=8.0) as sim:
+        wait_until(lambda: sim.snapshot()["state"]["smach_state"] == "suspension", timeout=2.0,
+                   what="start-up to end at the world's pace")

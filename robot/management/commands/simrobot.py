@@ -27,6 +27,8 @@ class Command(BaseCommand):
         parser.add_argument("--demo-s", type=float, default=30.0, help="seconds a demo lasts")
         parser.add_argument("--mic-coding", default="wave", choices=list(MIC_CODINGS),
                             help="what the microphone sends: raw PCM (wave) or mp3")
+        parser.add_argument("--time-scale", type=float, default=1.0,
+                            help="the robot's world runs this many times as fast (motion, timers, pauses)")
 
     def handle(self, *args: Any, **opts: Any) -> None:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
@@ -36,6 +38,7 @@ class Command(BaseCommand):
             map_name=str(opts["map"]), seed=int(opts["seed"]),
             pose_rate_hz=float(opts["pose_rate"]), startup_s=float(opts["startup_s"]),
             demo_s=float(opts["demo_s"]), mic_coding=str(opts["mic_coding"]),
+            time_scale=float(opts["time_scale"]),
         )
         asyncio.run(self._serve(robot))
 

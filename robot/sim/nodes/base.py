@@ -70,7 +70,7 @@ class BaseNode:
     def set_motors(self, on: bool) -> dict[str, Any]:
         self.body.motors = on
         if not on:
-            self.body.command(0.0, 0.0, time.monotonic())
+            self.body.command(0.0, 0.0, self.bus.clock.now())
         self.bus.rosout(2, NODE, f"Motors {'enabled' if on else 'disabled'}")
         self.bus.publish("motors_state", {"data": on})
         return {}
@@ -79,7 +79,7 @@ class BaseNode:
         if not self.body.motors:
             self.bus.warn_once("motors_off", NODE, "Motors are disabled: ignoring cmd_vel", 5.0)
             return
-        self.body.command(m["linear"]["x"], m["angular"]["z"], time.monotonic())
+        self.body.command(m["linear"]["x"], m["angular"]["z"], self.bus.clock.now())
 
     def _step(self, now: float, dt: float) -> None:
         if self.body.step(dt, now):
@@ -151,7 +151,7 @@ class BaseNode:
 
     def _pub_bumper(self) -> None:
         if self.bus.wants("bumper_state"):
-            hit = time.monotonic() < self.bumper_until
+            hit = self.bus.clock.now() < self.bumper_until
             front = hit and self.body.cmd_v >= 0
             self.bus.publish("bumper_state", {"header": messages.header("base_link"),
                                               "front_bumpers": [front] * 5, "rear_bumpers": [hit and not front] * 5})

@@ -46,7 +46,7 @@ class CommanderNode:
             self.bus.rosout(2, NODE, f"Robot mode: {mode.value}")
             for kind, value in ri.COMMANDER_SEQUENCES[mode]:
                 if kind == "pause":
-                    await asyncio.sleep(self.pause_s)  # every pause in the sequences is this one
+                    await self.bus.clock.sleep(self.pause_s)  # every pause in the sequences is this one
                 elif kind == "event":
                     self.bus.announce("register_event", {"data": str(value)})
                 elif kind == "emotion_system":

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import random
-import time
 from typing import Any
 
 from .. import messages
@@ -88,7 +87,7 @@ class ControllerNode:
             self._state_timer()
 
     def _on_state_change(self, event: str, old: str, new: str) -> None:
-        now = time.monotonic()
+        now = self.bus.clock.now()
         self._state_deadline = None
         if event:
             self.bus.rosout(2, NODE, f"State transition: {old} --[{event}]--> {new}")

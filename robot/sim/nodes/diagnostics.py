@@ -8,7 +8,6 @@ publishes them once a second, and at once when a level changes (a motor switched
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -133,11 +132,11 @@ class DiagnosticsNode:
         pass
 
     def _poll(self) -> None:
-        self.publisher.poll(time.monotonic())
+        self.publisher.poll(self.bus.clock.now())
 
     def read(self) -> Reading:
         base, b = self.base, self.base.body
-        hit = time.monotonic() < base.bumper_until
+        hit = self.bus.clock.now() < base.bumper_until
         front = hit and b.cmd_v >= 0
         return Reading(
             soc=base.soc, voltage=base.voltage(), recharge_state=base.recharge_state, motors=b.motors,
