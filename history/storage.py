@@ -16,7 +16,7 @@ import time
 from collections import defaultdict
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
-from typing import Any, TypeVar
+from typing import Any
 
 from django.db import close_old_connections, connection, transaction
 from django.db.models import BigIntegerField, ExpressionWrapper, F
@@ -27,7 +27,6 @@ from history.rollup import LEVELS_S, Aggregates, aggregate
 from robot.link.wire import jsonable
 
 log = logging.getLogger(__name__)
-T = TypeVar("T")
 
 # (topic, msg_type, receive time in epoch seconds, message as JSON text[, the same message parsed])
 # The recorder passes the parsed message along so the rollups need no second parse.
@@ -63,7 +62,7 @@ class FailureLog:
 IN_FLIGHT_WAIT_S = 10.0
 
 
-async def in_thread(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+async def in_thread[T](fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
     """Run blocking database work off the event loop, in a worker thread that tidies its connection."""
 
     def call() -> T:

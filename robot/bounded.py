@@ -14,14 +14,11 @@ import asyncio
 import io
 import logging
 from collections.abc import Awaitable, Iterable
-from typing import TypeVar
 
 log = logging.getLogger(__name__)
 
-T = TypeVar("T")
 
-
-async def within(awaitable: Awaitable[T], timeout: float) -> T:
+async def within[T](awaitable: Awaitable[T], timeout: float) -> T:
     """``awaitable``'s result, or TimeoutError after ``timeout`` seconds (it is cancelled, not waited for)."""
     task = asyncio.ensure_future(awaitable)
     try:

@@ -15,7 +15,6 @@ import re
 from dataclasses import dataclass, replace
 from enum import StrEnum
 from functools import cache
-from typing import TypeVar
 
 
 @dataclass(frozen=True)
@@ -139,10 +138,7 @@ def _overrides(setting: str) -> dict[str, str]:
         return {}
 
 
-_Named = TypeVar("_Named", Topic, Service, Action)
-
-
-def _apply(defaults: tuple[_Named, ...], setting: str) -> dict[str, _Named]:
+def _apply[Named: (Topic, Service, Action)](defaults: tuple[Named, ...], setting: str) -> dict[str, Named]:
     names = _overrides(setting)
     unknown = set(names) - {d.key for d in defaults}
     if unknown:

@@ -15,7 +15,7 @@ import threading
 import time
 import weakref
 from collections.abc import Awaitable, Callable, Iterable
-from typing import TYPE_CHECKING, Any, TypeVar, cast
+from typing import TYPE_CHECKING, Any, cast
 from urllib.parse import urlsplit
 
 import roslibpy
@@ -45,7 +45,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-T = TypeVar("T")
 
 # While the robot is away, how often to look whether rosbridge's port is listening again.
 PORT_WATCH_S = 0.2
@@ -585,7 +584,7 @@ def _close_quietly(ros: roslibpy.Ros) -> None:
         log.debug("close of the rosbridge connection did not complete", exc_info=True)
 
 
-def one_per_link(make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
+def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
     """``make(link)`` once for each link, kept for as long as the link lives."""
     made: weakref.WeakKeyDictionary[RobotLink, T] = weakref.WeakKeyDictionary()
 
