@@ -18,6 +18,8 @@ from tests.helpers import async_wait_until, wait_until
 
 PASSWORD = "correct-horse-battery"
 
+pytest_plugins = ["tests.wiring"]
+
 
 TASK_STOP_S = 15.0
 
@@ -64,7 +66,9 @@ asyncio.runners._cancel_all_tasks = _cancel_all_tasks_naming_stragglers  # type:
 _shutdown_default_executor = asyncio.BaseEventLoop.shutdown_default_executor
 
 
-async def _shutdown_default_executor_naming_stragglers(self: asyncio.BaseEventLoop, timeout: float | None = None) -> None:
+async def _shutdown_default_executor_naming_stragglers(
+    self: asyncio.BaseEventLoop, timeout: float | None = None
+) -> None:
     """The same clean-up's wait for the loop's worker threads, bounded: a call still blocked (say, a
     database write waiting on a lock the test's own transaction holds until after this) is named
     with its stack instead of hanging the run; it ends by itself once the transaction does."""
@@ -81,10 +85,19 @@ async def _shutdown_default_executor_naming_stragglers(self: asyncio.BaseEventLo
 asyncio.BaseEventLoop.shutdown_default_executor = _shutdown_default_executor_naming_stragglers  # type: ignore[method-assign]
 
 
+BROWSER_GROUPS = 2
+
+
 def pytest_collection_modifyitems(config, items):
     """Browser tests last: Playwright's sync API leaves an event loop running in the main
-    thread, which async tests after it cannot share."""
+    thread, which async tests after it cannot share. Under xdist they run in two groups by file,
+    each on one worker: a worker's first browser test starts a stack and a Chromium that run (and
+    cost CPU) until the session ends, so spreading them over every worker costs more than it saves."""
     items.sort(key=lambda item: any(item.get_closest_marker(m) is not None for m in ("browser", "stack")))
+    files = sorted({item.path for item in items if item.get_closest_marker("browser")})
+    for item in items:
+        if item.get_closest_marker("browser"):
+            item.add_marker(pytest.mark.xdist_group(f"browser-{files.index(item.path) % BROWSER_GROUPS}"))
 
 
 # --- users by role -----------------------------------------------------------------------

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import atexit
 import http.cookiejar
+import itertools
 import os
 import re
 import shutil
@@ -20,6 +21,7 @@ import tempfile
 import time
 import urllib.parse
 import urllib.request
+from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -29,10 +31,26 @@ USERS = {"ada": "admin", "otto": "operator", "olga": "operator", "vera": "viewer
 _migrated: dict[bool, Path] = {}  # with USERS or without: a migrated SQLite file for Stack.prepare_database
 
 
+def _port_range() -> Iterator[int]:
+    """Ports this test process hands out: a block of its own per xdist worker, below the kernel's
+    ephemeral range (32768+), so two workers never pick the same free port at the same moment."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw")
+    base = 20000 + (int(worker) % 12) * 1000
+    return itertools.cycle(range(base, base + 1000))
+
+
+_ports = _port_range()
+
+
 def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    for port in _ports:
+        with socket.socket() as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise AssertionError("unreachable")
 
 
 def wait_for_port(port: int, timeout: float = 20.0, proc: subprocess.Popen | None = None) -> None:

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterator
-from pathlib import Path
 
 import pytest
 import roslibpy
@@ -40,13 +38,3 @@ def raw_client(sim: SimThread) -> Iterator[Callable[[], Raw]]:
     for c in clients:
         c.close()
 
-
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """The simulator's own tests use no store, channel layer or database: they run in the embedded pass."""
-    if not os.environ.get("REDIS_URL"):
-        return
-    here = Path(__file__).parent
-    skip = pytest.mark.skip(reason="the simulator is the same in both passes: runs in the embedded pass")
-    for item in items:
-        if here in item.path.parents:
-            item.add_marker(skip)
