@@ -10,8 +10,11 @@ VIDEO_PORT ?= 8080
 ROSBRIDGE_URL ?= ws://127.0.0.1:$(SIM_PORT)
 VIDEO_URL ?= http://127.0.0.1:$(VIDEO_PORT)
 STAMP := $(VENV)/.installed
+# Python caches compiled modules only where it may write them: without the cache every process the
+# suite starts (Daphne, links, the simulator, manage.py) compiles all it imports again, ~5 CPU s each.
+unexport PYTHONDONTWRITEBYTECODE
 
-.PHONY: run test install browser nginx wrk stack stack-down lint bench clean
+.PHONY: run test test-repeat install browser nginx wrk stack stack-down lint bench clean
 
 # Installs exactly what requirements/dev.lock pins, with hashes. Upgrading is on purpose:
 #   .venv/bin/uv pip compile pyproject.toml --extra dev --generate-hashes --python-version 3.12 \
@@ -26,11 +29,12 @@ $(STAMP): requirements/dev.lock requirements/bootstrap.lock
 
 install: $(STAMP)
 
-# Debian's Chromium for the browser tests (Playwright drives it through executablePath).
+# Debian's Chromium for the browser tests (Playwright drives it through executablePath): its headless
+# shell for most, the whole browser where a test needs its UI (permission prompts).
 browser:
-	@command -v chromium >/dev/null 2>&1 || { \
-	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq chromium; \
-	  else sudo apt-get update -qq && sudo apt-get install -y -qq chromium; fi; }
+	@command -v chromium >/dev/null 2>&1 && command -v chromium-headless-shell >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq chromium chromium-headless-shell; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq chromium chromium-headless-shell; fi; }
 
 # Debian's nginx (and openssl for the self-signed certificate) for scripts/stack.sh and its tests.
 nginx:
@@ -62,6 +66,11 @@ run: install
 
 test: install browser nginx
 	bash scripts/test.sh
+
+# The suite N times (make test-repeat N=5): which tests ever failed, and how often.
+N ?= 5
+test-repeat: install browser nginx
+	bash scripts/test_repeat.sh $(N)
 
 lint: install
 	$(BIN)/ruff check .

@@ -17,7 +17,7 @@ from playwright.sync_api import expect
 
 from robot import interface as ri
 from robot.sim.audio import dominant_hz
-from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, fresh_page, login
+from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, FULL_CHROMIUM, FULL_CHROMIUM_ARGS, fresh_page, login
 from tests.stack import Stack
 
 pytestmark = pytest.mark.browser
@@ -235,8 +235,8 @@ def test_plain_http_on_a_network_address_explains_why_talk_cannot_work(media_pag
 @pytest.fixture
 def denying_page(browser, tone_wav):
     """Chromium with a (fake) microphone whose permission prompts are all answered no."""
-    instance = browser.browser_type.launch(executable_path=CHROMIUM, args=[
-        *CHROMIUM_ARGS, "--use-fake-device-for-media-stream", f"--use-file-for-fake-audio-capture={tone_wav}",
+    instance = browser.browser_type.launch(executable_path=FULL_CHROMIUM, args=[
+        *FULL_CHROMIUM_ARGS, "--use-fake-device-for-media-stream", f"--use-file-for-fake-audio-capture={tone_wav}",
         "--deny-permission-prompts",
     ])
     try:
