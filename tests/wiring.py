@@ -73,6 +73,18 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 @pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Iterator[pytest.TestReport]:
+    """In the embedded pass, a test that skips itself and is not marked runs in no pass at all."""
+    report: pytest.TestReport = yield
+    if (report.when == "setup" and report.skipped and not os.environ.get("REDIS_URL")
+            and not depends_on_wiring(item)):
+        report.outcome = "failed"
+        report.longrepr = (f"{item.nodeid} skips itself in the embedded pass ({report.longrepr!r}) but is not "
+                           f"marked `{WIRING}` (or redis, postgres, stack): it would run in no pass")
+    return report
+
+
+@pytest.hookimpl(wrapper=True)
 def pytest_runtest_call(item: pytest.Item) -> Iterator[None]:
     _touched.clear()
     result = yield

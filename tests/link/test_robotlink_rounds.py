@@ -28,6 +28,7 @@ def private_redis(settings):
     server.stop()
 
 
+@pytest.mark.redis
 @pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")
 async def test_failed_rounds_are_logged_and_the_link_stands_by_again_its_link_stopped(
         private_redis, monkeypatch, caplog):

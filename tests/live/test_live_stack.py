@@ -67,6 +67,7 @@ def test_it_fans_out_embedded_through_a_real_daphne():
         assert introspect(stack)["subscriptions"][ri.topic("odom").name] == 1
 
 
+@pytest.mark.redis
 @pytest.mark.skipif(not SERVICES_PASS or shutil.which("redis-server") is None, reason="runs in the services pass")
 def test_it_fans_out_scaled_through_one_redis_subscription_per_web_process():
     port = free_port()

@@ -33,6 +33,7 @@ async def wait_for(predicate, timeout: float, what: str) -> None:
         await asyncio.sleep(0.1)
 
 
+@pytest.mark.redis
 @pytest.mark.skipif(not SERVICES_PASS or shutil.which("redis-server") is None, reason="runs in the services pass")
 def test_pages_on_two_web_processes_share_one_upstream_subscription():
     redis = PrivateRedis().start()
