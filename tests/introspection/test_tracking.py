@@ -33,7 +33,9 @@ async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link
                                        and stored(SMACH_GRAPH_KEY), timeout=15, what="the whole graph")
         await async_wait_until(lambda: leaves() == ["/SM_ROOT/suspension"], timeout=10, what="suspension")
         assert stored(SMACH_ACTIVE_KEY)["source"] == "introspection"
-        assert stored(SMACH_ACTIVE_KEY)["version"] == graph["version"]
+        # The graph is stored first, then the active state on it.
+        await async_wait_until(lambda: stored(SMACH_ACTIVE_KEY)["version"] == graph["version"], timeout=5,
+                               what="the active state on the whole graph")
         sim.call(lambda: sim.robot.fire("behaviour_start"))
         await async_wait_until(lambda: leaves() == ["/SM_ROOT/behaviour/idle"], timeout=10, what="idle")
         active = stored(SMACH_ACTIVE_KEY)
