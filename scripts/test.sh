@@ -72,7 +72,10 @@ part "Embedded default: SQLite + in-memory channel layer, all but the browser te
 part "Embedded default: the browser tests (headless Chromium, two groups)" \
   embedded run_pytest browser -m browser -n 2 --dist loadgroup "$@" || status=1
 part "Services: PostgreSQL + Redis, the tests that depend on the wiring" \
-  services run_pytest services -m "wiring and not browser" -n "$WORKERS" --dist loadgroup "$@" || status=1
+  services run_pytest services -m "wiring and not browser and not stack" -n "$WORKERS" "$@" || status=1
+# The production topology (nginx, two Daphne, two links, Celery) times its own failovers and drains:
+# it runs alone, with nothing else competing for the two cores.
+part "Services: the production topology, alone" services run_pytest topology -m stack "$@" || status=1
 wait $lint_pid || true
 echo "== Lint and types (ruff, mypy)"
 cat "$LOGS/lint.log"

@@ -98,8 +98,6 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if item.get_closest_marker("browser"):
             item.add_marker(pytest.mark.xdist_group(f"browser-{files.index(item.path) % BROWSER_GROUPS}"))
-        elif item.get_closest_marker("stack"):  # one production topology at a time: each is a dozen processes
-            item.add_marker(pytest.mark.xdist_group("stack"))
 
 
 # --- users by role -----------------------------------------------------------------------
