@@ -24,7 +24,7 @@ ensure_services() {
   fi
 }
 
-# pytest with coverage into its own data file (runs go on side by side); exit 5 (the arguments chose
+# pytest with coverage into a data file of its own (combined at the end); exit 5 (the arguments chose
 # none of this run's tests) counts as passing.
 run_pytest() {
   local name=$1 status=0
