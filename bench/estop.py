@@ -7,7 +7,10 @@ Twist the robot still receives in the 5 s after the stop's zero while the driver
 sending input. Then 20 open pages in headless Chromium: from the press to the banner being
 shown on each page. Scaled stack (private redis-server, simulator, Daphne, robotlink): the
 web process is SIGKILLed while its driver holds W; from the kill to the zero Twist the link
-publishes by itself. Prints ``name: value`` lines; the machine may be shared.
+publishes by itself. The mode race: Behaviour requested, the E-STOP pressed 0.05-0.5 s later,
+20 times: every mode event, mode string or emotion-system switch that reached the robot after
+the E-STOP's answer and was not the stop's own last message still on the wire. Prints
+``name: value`` lines; the machine may be shared.
 """
 
 from __future__ import annotations
@@ -171,6 +174,36 @@ async def stop_while_driving(stack: Stack) -> dict[str, list[float]]:
     return out
 
 
+RACE_RUNS = 20
+MODE_TOPICS = ("register_event", "emotional_controller", "robot_mode")
+
+
+def mode_race(stack: Stack) -> list[int]:
+    """Per run, the messages that reached the robot after the E-STOP's answer that the stop did
+    not send (anything the latch holds back, or anything later than a message's time on the wire)."""
+    from robot import interface as ri
+
+    api = Api(stack, login(stack, "olga"))
+    topics = {key: Simulator(stack.video_port, ri.topic(key).name) for key in MODE_TOPICS}
+    late: list[int] = []
+    for run in range(RACE_RUNS):
+        change = threading.Thread(target=api.post, args=("/api/robot/mode/", {"mode": "behaviour"}))
+        counts = {key: sim.count() for key, sim in topics.items()}
+        change.start()
+        time.sleep(0.05 + 0.45 * run / (RACE_RUNS - 1))
+        status, body = api.post("/api/robot/estop/")
+        answered = time.time()
+        assert status == 200, body
+        change.join(10)
+        time.sleep(0.5)
+        after = [(key, m) for key, sim in topics.items()
+                 for m in sim._get(sim.count() - counts[key])["messages"] if m["t"] > answered]
+        late.append(sum(1 for key, m in after if m["t"] > answered + 0.1
+                        or not ri.passes_latch(ri.topic(key).name, m["msg"], by_the_stop=True)))
+        api.release_and_enable()
+    return late
+
+
 def banner_on_all_pages(stack: Stack) -> list[float]:
     from playwright.sync_api import sync_playwright
 
@@ -240,6 +273,7 @@ def main() -> None:
     with Stack() as stack:
         stack.wait_robot_online()
         stopped = asyncio.run(stop_while_driving(stack))
+        race = mode_race(stack)
         banners = banner_on_all_pages(stack)
     # The killed process's driver keeps the drive lock until it expires: make that quick.
     redis = PrivateRedis().start()
@@ -257,6 +291,8 @@ def main() -> None:
     print(f"estop_banner_all_pages_p50_ms: {statistics.median(banners):.1f}")
     print(f"motion_after_estop_twists: {sum(stopped['motion'])}")
     print(f"web_kill_to_zero_twist_ms: {max(kills):.1f}")
+    print(f"estop_race_events_after_answer: {sum(race)}")
+    print(f"estop_race_runs: {len(race)}")
     print(f"estop_trials: {len(stopped['zero'])}")
     print(f"estop_banner_samples: {len(banners)}")
     print(f"web_kills: {len(kills)}")

@@ -6,7 +6,7 @@ from django.urls import reverse
 
 from cyborg_site.roles import is_admin, is_operator, role_of
 from dashboard.routing import LIVE_SOCKET_PATH
-from robot.teleop.latch import latch
+from robot.commands.latch import latch
 
 # The command API views the pages' command buttons post to, by their data-command name.
 COMMAND_NAMES = ("mode", "event", "speech", "emotion", "emotion-system", "motors", "playback", "dome")

@@ -12,9 +12,11 @@ benchmarks use it too.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from enum import StrEnum
 from functools import cache
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -163,7 +165,7 @@ def _actions() -> dict[str, Action]:
 
 def reload() -> None:
     """Forget cached names (tests that override the settings call this)."""
-    for f in (_topics, _services, _actions):
+    for f in (_topics, _services, _actions, _latch_rules):
         f.cache_clear()
 
 
@@ -372,3 +374,55 @@ def action_topic(key: str, suffix: str) -> tuple[str, str]:
     """(name, type) of one of an action server's topics: suffix goal|cancel|status|feedback|result."""
     a = action(key)
     return f"{a.name}/{suffix}", _ACTION_TOPIC_TYPES[suffix].format(type=a.type)
+
+
+# --- what still reaches the robot while the E-STOP is latched ------------------------------
+# Everything that moves the robot or changes its mode or motors is held back until an operator
+# releases the stop. What the stop itself sends passes: a zero Twist (from anyone), and from the
+# stop's own steps only, the walk to suspension (the events out of the behaviour container and out
+# of a mode), the emotion system OFF and the mode "stop". Cancelling goals and motors off pass: a
+# topic or service not named here cannot move the robot.
+STOPPING_EVENTS: frozenset[str] = frozenset({Event.ABORTED, Event.PREEMPTED, Event.SUSPEND})
+
+
+def is_zero_twist(msg: dict[str, Any]) -> bool:
+    parts = (msg.get("linear") or {}, msg.get("angular") or {})
+    return all(float(part.get(axis) or 0.0) == 0.0 for part in parts for axis in ("x", "y", "z"))
+
+
+def _never(msg: dict[str, Any]) -> bool:
+    return False
+
+
+def _data_in(allowed: frozenset[str]) -> Callable[[dict[str, Any]], bool]:
+    return lambda msg: msg.get("data") in allowed
+
+
+LatchRule = Callable[[dict[str, Any]], bool]  # the message (or a service's arguments) may pass
+_LATCH_TOPICS: dict[str, LatchRule] = {
+    "cmd_vel": is_zero_twist,
+    "register_event": _data_in(STOPPING_EVENTS),
+    "robot_mode": _data_in(frozenset({Mode.STOP.value})),
+    "emotional_controller": _data_in(frozenset({EMOTION_SYSTEM_OFF})),
+    "move_base_simple_goal": _never,
+    "initialpose": _never,
+}
+_LATCH_ACTION_GOALS = ("move_base", "navigation")
+_LATCH_SERVICES: dict[str, LatchRule] = {"enable_motors": _never}
+
+
+@cache
+def _latch_rules() -> dict[str, LatchRule]:
+    rules = {topic(key).name: rule for key, rule in _LATCH_TOPICS.items()}
+    rules.update({action_topic(key, "goal")[0]: _never for key in _LATCH_ACTION_GOALS})
+    rules.update({service(key).name: rule for key, rule in _LATCH_SERVICES.items()})
+    return rules
+
+
+def passes_latch(name: str, msg: dict[str, Any], *, by_the_stop: bool) -> bool:
+    """May this publish on topic ``name`` (or call of service ``name``) reach the robot while the
+    E-STOP is latched? ``by_the_stop``: it is one of the stop's own steps."""
+    if name == topic("cmd_vel").name:
+        return is_zero_twist(msg)
+    rule = _latch_rules().get(name)
+    return rule is None or (by_the_stop and rule(msg))

@@ -9,7 +9,7 @@ import coverage
 
 SAFETY = {
     "robot/teleop/estop.py": "E-STOP",
-    "robot/teleop/latch.py": "latch",
+    "robot/commands/latch.py": "latch",
     "robot/teleop/lock.py": "drive lock",
     "robot/teleop/driver.py": "deadman (teleop loop)",
     "robot/teleop/driving.py": "drive sessions",

@@ -15,8 +15,8 @@ from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, run
 from robot.api.common import error_responses
+from robot.commands.latch import alatch
 from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
-from robot.teleop.latch import alatch
 
 
 class EstopStepSerializer(serializers.Serializer):

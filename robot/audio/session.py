@@ -40,7 +40,6 @@ from robot.commands.pipeline import Busy, InvalidCommand, arun_command
 from robot.link.audio import LISTEN_RENEW_S
 from robot.link.bus import RobotError, apublish, arequest
 from robot.live.state import get_store
-from robot.teleop.latch import ensure_released
 from robot.teleop.lock import DriveLock, Holder
 
 log = logging.getLogger(__name__)
@@ -182,7 +181,6 @@ class AudioSession:
             problem = format_problem(content)
             if problem:
                 raise InvalidCommand(problem)
-            await ensure_released()
             current = await self.lock.acquire(self.me)
             if current != self.me:
                 raise Busy(f"{current.username} is talking.")

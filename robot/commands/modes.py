@@ -39,7 +39,6 @@ from robot.link import bus
 from robot.live.announce import apublish_state
 from robot.live.groups import MODE_REQUEST_KEY
 from robot.live.state import redis_key
-from robot.teleop.latch import ensure_released
 
 # How long one step may take to show up on state_change, and how many steps a change may take
 # (the longest way out is sleeping → idle → suspension; the rest is room for states that move
@@ -170,12 +169,24 @@ async def perform_mode(mode: ri.Mode, *, requested_by: str = "") -> str:
     return outcome
 
 
+async def perform_stop(*, requested_by: str = "") -> str:
+    """Mode stop for the E-STOP. A mode change under way may have sent its last event just before
+    the latch (the link refuses the ones after), and the robot's answer to it can land after this
+    walk reached suspension: once that change has ended, walk again from where the robot is."""
+    under_way = await change_under_way()
+    outcome = await perform_mode(ri.Mode.STOP, requested_by=requested_by)
+    if not under_way:
+        return outcome
+    deadline = asyncio.get_running_loop().time() + STEP_TIMEOUT_S
+    while await change_under_way() and asyncio.get_running_loop().time() < deadline:
+        await asyncio.sleep(0.02)
+    return await perform_mode(ri.Mode.STOP, requested_by=requested_by)
+
+
 def change_mode(mode: ri.Mode | Any, *, user: Any) -> Command:
     """The full command: validation, serialisation (role check and audit by the pipeline)."""
 
     async def send(chosen: ri.Mode) -> str:
-        if chosen is not ri.Mode.STOP:
-            await ensure_released()
         async with serialised(chosen):
             by = user.get_username() if getattr(user, "is_authenticated", False) else ""
             return await perform_mode(chosen, requested_by=by)
@@ -211,6 +222,18 @@ def _busy(holder: str) -> Busy:
 
 def _lock_key() -> str:
     return redis_key("mode-change-lock")
+
+
+async def change_under_way() -> bool:
+    if not settings.REDIS_URL:
+        return _local_lock.locked()
+    import redis.asyncio
+
+    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    try:
+        return bool(await client.exists(_lock_key()))
+    finally:
+        await client.aclose()
 
 
 @asynccontextmanager

@@ -8,13 +8,10 @@ from robot import interface as ri
 from robot.commands.pipeline import Command
 from robot.commands.validation import clean_bool
 from robot.link import bus
-from robot.teleop.latch import ensure_released
 
 
 def set_motors(enabled: Any) -> Command:
     async def send(on: bool) -> str:
-        if on:
-            await ensure_released()
         key = "enable_motors" if on else "disable_motors"
         try:
             await bus.acall_service(key)

@@ -1,6 +1,6 @@
 """The one path every command takes, from a page, the API, a websocket or a task:
-check the role, check the input, send it, write the audit entry, and hand back a clear
-outcome or error.
+check the role, check the input, refuse it under the E-STOP if it moves the robot
+(``robot.commands.gate``), send it, write the audit entry, and hand back a clear outcome or error.
 
 A command is a ``Command``: ``check`` validates the input *before* anything is sent (it may
 read the database, e.g. preset names) and ``send`` does the robot work on the event loop.
@@ -32,7 +32,9 @@ from asgiref.sync import async_to_sync, sync_to_async
 from cyborg_site.roles import is_operator, roles_cached
 from robot.commands.audit import audit_record
 from robot.commands.audit_writer import writer
-from robot.link.bus import RobotError
+from robot.commands.gate import Declaration, declaration
+from robot.commands.latch import ensure_released
+from robot.link.bus import RobotError, stopping
 
 _record = writer.record
 
@@ -68,7 +70,8 @@ class Command:
     """What to audit (``action``, ``params``), how to check the input and how to send it.
 
     ``send`` gets what ``check`` returned and returns the outcome for a person; whatever else
-    a caller needs back (a goal, a report) it leaves in ``result``.
+    a caller needs back (a goal, a report) it leaves in ``result``. Whether it moves the robot
+    is declared by its action in ``robot.commands.gate`` (an undeclared action is refused here).
     """
 
     action: str
@@ -79,6 +82,21 @@ class Command:
     refusal: str = FORBIDDEN  # what a person whose role ``allowed`` refuses is told
     result: dict[str, Any] = field(default_factory=dict)
     check_on_loop: bool = False  # ``check`` reads no database: ``arun`` may run it on the event loop
+    moves: Declaration = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.moves = declaration(self.action)
+
+
+async def _send(command: Command, checked: Any) -> str:
+    """``send``, unless the E-STOP holds back what the command would do. A command that does not
+    move the robot may stop it further (mode stop, the emotion system off): the link lets those
+    of its requests through the latch (``bus.stopping``) and, by their content, nothing else."""
+    if command.moves(checked):
+        await ensure_released()
+        return await command.send(checked) or "ok"
+    with stopping():
+        return await command.send(checked) or "ok"
 
 
 def _audit_fields(command: Command, user: Any, source: str) -> dict[str, Any]:
@@ -106,7 +124,7 @@ def run_command(command: Command, *, user: Any, source: str) -> str:
     audit = _audit_fields(command, user, source)
     checked = _prepare(command, audit)
     try:
-        outcome = async_to_sync(command.send)(checked) or "ok"
+        outcome = async_to_sync(_send)(command, checked)
     except RobotError as exc:
         audit_record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
         raise
@@ -130,7 +148,7 @@ async def arun(command: Command, *, user: Any, source: str) -> str:
     else:
         checked = await _aprepare(command, audit)
     try:
-        outcome = await command.send(checked) or "ok"
+        outcome = await _send(command, checked)
     except RobotError as exc:
         await _record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
         raise

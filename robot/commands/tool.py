@@ -17,16 +17,13 @@ from robot import interface as ri
 from robot.commands import validation as v
 from robot.commands.pipeline import Command
 from robot.link import bus
-from robot.teleop.latch import ensure_released
 
 
 def _string_command(
     *, action: str, field: str, value: Any, key: str, clean: Callable[[Any], str], outcome: Callable[[str], str],
-    needs_release: bool = False, check_on_loop: bool = False,
+    check_on_loop: bool = False,
 ) -> Command:
     async def send(data: str) -> str:
-        if needs_release:
-            await ensure_released()
         await bus.apublish(key, {"data": data})
         return outcome(data)
 
@@ -38,9 +35,8 @@ def _switch(on: Any) -> str:
 
 
 def send_event(value: Any) -> Command:
-    # An event can start a behaviour or a demo: a mode change by another name, so not while E-STOPped.
     return _string_command(action="event", field="event", value=value, key="register_event", clean=v.clean_event,
-                           outcome=lambda e: f"Sent event {e}", needs_release=True, check_on_loop=True)
+                           outcome=lambda e: f"Sent event {e}", check_on_loop=True)
 
 
 def say(text: Any) -> Command:

@@ -11,6 +11,9 @@ import asyncio
 import time
 import uuid
 import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any, cast
 
 from asgiref.sync import async_to_sync
@@ -71,12 +74,31 @@ async def _is_online() -> bool:
     return bool(view["robot_connected"] or view.get("connecting"))
 
 
+_stopping: ContextVar[bool] = ContextVar("stopping", default=False)
+
+
+@contextmanager
+def stopping() -> Iterator[None]:
+    """Requests made inside (and in tasks started inside) are meant to stop the robot (the E-STOP's
+    steps, a command that does not move it): the link lets those that stop it through its latch
+    (``interface.passes_latch``), and holds back the same requests from anyone else (a mode change
+    still walking when the stop came)."""
+    token = _stopping.set(True)
+    try:
+        yield
+    finally:
+        _stopping.reset(token)
+
+
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
-    return cast(LinkRequest, {
+    request = cast(LinkRequest, {
         "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
         # The link may need most of the timeout for a service call; leave room for the reply.
         "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
     })
+    if _stopping.get():
+        request["stopping"] = True
+    return request
 
 
 async def aping_over_layer(timeout: float) -> bool:

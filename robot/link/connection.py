@@ -518,15 +518,21 @@ class RobotLink:
         if op == "estop":
             return {"ok": True}
         if op == "publish":
-            guarded = self.guard is not None and request["topic"] == ri.topic("cmd_vel").name
-            refusal = self.guard.check(request["msg"]) if guarded and self.guard else None
-            if refusal:
-                return {"ok": False, "error_code": "estop", "error": refusal}
+            refused = self._held_back(request, request["topic"], request["msg"])
+            if refused:
+                return refused
             self._publisher(request["topic"], request["msg_type"]).publish(roslibpy.Message(request["msg"]))
             return {"ok": True}
         if op == "call_service":
             return await self._call_service(request)
         return {"ok": False, "error_code": "invalid", "error": f"Unknown link operation {op!r}"}
+
+    def _held_back(self, request: LinkRequest, name: str, msg: dict[str, Any]) -> LinkReply | None:
+        """The last check before the robot: the latch, on every publish and service call."""
+        if self.guard is None:
+            return None
+        refusal = self.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")))
+        return {"ok": False, "error_code": "estop", "error": refusal} if refusal else None
 
     def _publish_zero(self) -> None:
         if self.ros is None or not self.ros.is_connected:
@@ -553,6 +559,9 @@ class RobotLink:
         return await self._call_service(request)
 
     async def _call_service(self, request: LinkRequest) -> LinkReply:
+        refused = self._held_back(request, request["service"], request.get("args") or {})
+        if refused:
+            return refused
         loop = asyncio.get_running_loop()
         future: asyncio.Future = loop.create_future()
 

@@ -3,7 +3,9 @@
 - Deadman: a moving Twist must be followed by another within ``deadman_s``; when the stream
   goes quiet (a web process died, a driver's loop stalled) the guard publishes zero itself.
 - E-STOP: once engaged it publishes zero at once and again at the teleop rate for a short
-  hold, and refuses every non-zero Twist until released.
+  hold, and refuses every non-zero Twist until released, and every other publish or service
+  call that would move the robot or change its mode or motors (``interface.passes_latch``): the
+  last check before the robot, so no sequence, queued request or stale process outlives a stop.
 - Stop: a link that shuts down while the robot moves sends zero first.
 """
 
@@ -15,12 +17,11 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from robot import interface as ri
+
 log = logging.getLogger(__name__)
 
-
-def is_zero_twist(msg: dict[str, Any]) -> bool:
-    parts = (msg.get("linear") or {}, msg.get("angular") or {})
-    return all(float(part.get(axis) or 0.0) == 0.0 for part in parts for axis in ("x", "y", "z"))
+LATCHED = "E-STOP engaged: refused until an operator releases it"
 
 
 class CmdVelGuard:
@@ -44,11 +45,19 @@ class CmdVelGuard:
         self._deadman: asyncio.TimerHandle | None = None
         self._hold: asyncio.Task | None = None
 
+    def check_publish(self, name: str, msg: dict[str, Any], *, by_the_stop: bool = False) -> str | None:
+        """Before anything goes out on topic ``name`` (or to service ``name``): a refusal message, or None."""
+        if name == ri.topic("cmd_vel").name:
+            return self.check(msg)
+        if self.latched and not ri.passes_latch(name, msg, by_the_stop=by_the_stop):
+            return f"{LATCHED} ({name})"
+        return None
+
     def check(self, msg: dict[str, Any]) -> str | None:
         """Before a Twist goes out: a refusal message, or None (and the deadman is re-armed)."""
-        zero = is_zero_twist(msg)
+        zero = ri.is_zero_twist(msg)
         if self.latched and not zero:
-            return "E-STOP engaged: motion refused until an operator releases it"
+            return f"{LATCHED} (motion)"
         self.moving = not zero
         self._disarm()
         if self.moving:

@@ -28,7 +28,7 @@ AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its wo
 SMACH_GRAPH_KEY = "smach_graph"  # the state machine's containers as a graph (robot.introspection)
 SMACH_ACTIVE_KEY = "smach_active"  # its active states, and the events that leave them
 DIAGNOSTICS_KEY = "diagnostics_summary"  # the latest diagnostics of every component
-LATCH_KEY = "estop"  # the E-STOP latch (written by robot.teleop.latch, read by the link)
+LATCH_KEY = "estop"  # the E-STOP latch (written by robot.commands.latch, read by the link)
 # Map overlays, made by the link from the robot's topics (robot.overlays): map-frame shapes, costmap tiles.
 OVERLAY_SCAN_KEY = "overlay_scan"
 OVERLAY_PARTICLES_KEY = "overlay_particles"
@@ -88,6 +88,7 @@ class LinkRequest(TypedDict, total=False):
     service_type: str
     args: dict[str, Any]
     timeout: float
+    stopping: bool  # one of the E-STOP's own steps: may pass the latch (interface.passes_latch)
     listener: str  # audio: which listener's lease
     on: bool
     holder: str  # topics_watch: which web process's leases

@@ -21,7 +21,6 @@ from robot.navigation.selectors import anavigation_status
 from robot.navigation.status import TERMINAL_STATES, goal_view
 from robot.navigation.transforms import normalize_angle, yaw_to_quaternion
 from robot.navigation.validation import POSE_FIELDS, acheck_position, audit_params, clean_yaw, number, only_fields
-from robot.teleop.latch import ensure_released
 
 # PoseWithCovarianceStamped for /initialpose: 0.5 m std-dev in x and y, 15 degrees in yaw.
 INITIAL_POSE_VAR_XY = 0.25
@@ -93,7 +92,6 @@ def goal_send(*, user: Any, data: dict[str, Any]) -> Command:
 
     async def send(pose: tuple[float, float, float]) -> str:
         x, y, yaw = pose
-        await ensure_released()
         sent = await asend_pose_goal(user=user, x=x, y=y, yaw=yaw)
         command.result.update(goal_view(sent, None) or {})
         return f"goal {sent['id']} sent to ({x:.2f}, {y:.2f}) facing {math.degrees(sent['yaw']):.0f}°"
@@ -147,7 +145,6 @@ def initial_pose_set(*, data: dict[str, Any]) -> Command:
     async def send(pose: tuple[float, float, float]) -> str:
         x, y, yaw = pose
         heading = normalize_angle(yaw)
-        await ensure_released()
         await acheck_position(x, y, allow_unknown=True)
         await apublish("initialpose", initial_pose_message(x, y, heading))
         command.result.update(x=x, y=y, yaw=heading)

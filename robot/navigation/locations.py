@@ -13,7 +13,6 @@ from robot.models import Location
 from robot.navigation.goals import asend_pose_goal, astart_goal, navigation_goal_message, new_goal_id
 from robot.navigation.selectors import pose_of
 from robot.navigation.status import goal_view
-from robot.teleop.latch import ensure_released
 
 
 class LocationNotFound(RobotError):
@@ -47,7 +46,6 @@ def location_go(*, user: Any, name: str) -> Command:
         return outcome
 
     async def _go(location: Location) -> str:
-        await ensure_released()
         if settings.NAVIGATION_BACKEND == "cyborg_navigation":
             goal_id = new_goal_id()
             sent.update(await astart_goal(

@@ -18,10 +18,10 @@ from typing import Any
 
 from django.conf import settings
 
+from robot.commands.latch import alatch
 from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
 from robot.link.bus import EstopEngaged, RobotError
 from robot.teleop.driving import LockEvent, announce, lock_acquire, lock_release, lock_takeover, teleop_record
-from robot.teleop.latch import alatch
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import NotHolding, TeleopSession
 from robot.teleop.twist import Command, InvalidInput, command_from_input

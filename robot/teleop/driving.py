@@ -10,10 +10,10 @@ from channels.layers import get_channel_layer
 
 from cyborg_site.roles import is_admin
 from robot.commands.audit import audit_record
+from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, arun_command
 from robot.link.bus import EstopEngaged, RobotError
 from robot.live.groups import LOCK_GROUP
-from robot.teleop.latch import ensure_released
 from robot.teleop.lock import DriveLock, Holder, get_lock
 from robot.teleop.session import publish_cmd_vel
 from robot.teleop.twist import STOP
@@ -39,7 +39,6 @@ async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock
     lock = lock or get_lock()
 
     async def run() -> str:
-        await ensure_released()
         current = await lock.acquire(me)
         if current != me:
             raise Busy(f"{current.username} is driving.")
@@ -58,7 +57,6 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
 
     async def run() -> str:
         nonlocal previous
-        await ensure_released()
         previous = await lock.take(me)
         await _give_back_if_latched(lock, me)
         await announce(me, "takeover")

@@ -11,14 +11,13 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
-from robot import interface as ri
 from robot.audio.talk import end_all_talk
-from robot.commands.modes import perform_mode
+from robot.commands.latch import Latch, aengage, alatch, arecord_steps, arelease
+from robot.commands.modes import perform_stop
 from robot.commands.pipeline import Command, InvalidCommand, arun
-from robot.link.bus import RobotError, acall_service, arequest
+from robot.link.bus import RobotError, acall_service, arequest, stopping
 from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
-from robot.teleop.latch import Latch, aengage, alatch, arecord_steps, arelease
 from robot.teleop.lock import get_lock
 
 log = logging.getLogger(__name__)
@@ -85,7 +84,7 @@ async def _disable_motors(by: str) -> str:
 
 async def _mode_stop(by: str) -> str:
     # The raw mode change: an e-stop is never refused because a mode change is under way.
-    return await perform_mode(ri.Mode.STOP, requested_by=by)
+    return await perform_stop(requested_by=by)
 
 
 Step = Callable[[str], Awaitable[str]]
@@ -113,10 +112,11 @@ async def _attempt(name: str, step: Step, by: str) -> StepResult:
 
 async def estop_steps(*, by: str = "") -> EstopReport:
     """Latch, then every step: the zero Twist first (fastest), then the rest side by side."""
-    zero = asyncio.ensure_future(_attempt(*STEPS[0], by))
-    latched = await _attempt("latch", _latch, by)
-    head = await zero
-    tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in STEPS[1:]))
+    with stopping():  # the steps' requests pass the link's latch, where they stop the robot
+        zero = asyncio.ensure_future(_attempt(*STEPS[0], by))
+        latched = await _attempt("latch", _latch, by)
+        head = await zero
+        tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in STEPS[1:]))
     report = EstopReport((latched, head, *tail))
     if latched.ok:
         try:

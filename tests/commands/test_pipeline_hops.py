@@ -34,13 +34,13 @@ def test_an_estop_from_the_api_crosses_to_the_event_loop_once(operator_api, monk
     monkeypatch.setattr(api_teleop, "async_to_sync", _counting(api_teleop.async_to_sync, calls))
     response = operator_api.post("/api/robot/estop/")  # no robot: every robot step fails, the rest runs
     assert response.status_code == 502 and response.json()["latch"]["latched"] is True
-    assert calls == ["send"]
+    assert calls == ["_send"]
     assert AuditEntry.objects.get(action="estop").error_code == "partial"
 
     calls.clear()
     response = operator_api.post("/api/robot/estop/release/", {"confirm": True}, format="json")
     assert response.status_code == 200 and response.json()["latched"] is False
-    assert calls == ["send"]
+    assert calls == ["_send"]
 
 
 def _recorder(seen: dict[str, int], name: str, result: Any) -> Callable[..., Any]:
@@ -62,18 +62,18 @@ async def test_a_socket_users_command_runs_its_role_check_on_the_loop(operator, 
         seen["send"] = threading.get_ident()
         return "sent"
 
-    command = Command("test.hops", {}, send, allowed=_recorder(seen, "allowed", is_operator))
+    command = Command("speech", {}, send, allowed=_recorder(seen, "allowed", is_operator))
     assert await arun(command, user=operator, source="websocket") == "sent"
     assert seen == {"allowed": loop_thread, "send": loop_thread}
-    entry = await AuditEntry.objects.aget(action="test.hops")
+    entry = await AuditEntry.objects.aget(action="speech")
     assert entry.ok and entry.outcome == "sent" and entry.username == operator.username
 
     seen.clear()
-    refused = Command("test.refused", {}, send, allowed=_recorder(seen, "allowed", is_operator))
+    refused = Command("emotion", {}, send, allowed=_recorder(seen, "allowed", is_operator))
     with pytest.raises(Forbidden):
         await arun(refused, user=viewer, source="websocket")
     assert seen == {"allowed": loop_thread}
-    assert (await AuditEntry.objects.aget(action="test.refused")).error_code == "forbidden"
+    assert (await AuditEntry.objects.aget(action="emotion")).error_code == "forbidden"
 
 
 async def test_an_uncached_user_or_a_check_costs_one_thread_hop_for_both(operator):
@@ -86,7 +86,7 @@ async def test_an_uncached_user_or_a_check_costs_one_thread_hop_for_both(operato
         seen["send"] = threading.get_ident()
         return f"sent {checked}"
 
-    command = Command("test.checked", {}, send, check=_recorder(seen, "check", 7),
+    command = Command("dome", {}, send, check=_recorder(seen, "check", 7),
                       allowed=_recorder(seen, "allowed", is_operator))
     assert await arun(command, user=fresh, source="task") == "sent 7"
     assert seen["allowed"] == seen["check"] != loop_thread

@@ -3,12 +3,15 @@ that moves the robot refused (409, "E-STOP engaged by NAME at TIME") on the API 
 websocket until an operator releases it with a confirmation, audited."""
 
 import asyncio
+import contextlib
+import time
 
 import pytest
 
 from cyborg_site.roles import Role
 from robot import interface as ri
 from robot.models import AuditEntry
+from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until
 from tests.teleop.support import drive_socket, is_moving, is_zero, key, twists, wait_twist
 
@@ -91,8 +94,8 @@ async def test_the_link_refuses_motion_and_holds_zero_while_latched(link, sim, s
 
 async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
     """A press while the link could not be told (another process, a dead command path)."""
+    from robot.commands.latch import aengage, arelease
     from robot.link.bus import EstopEngaged, apublish
-    from robot.teleop.latch import aengage, arelease
     from robot.teleop.twist import Command, twist
 
     await aengage(by="someone")
@@ -159,3 +162,70 @@ def test_only_a_confirmed_release_by_an_operator_clears_it(operator_api, viewer_
     entry = AuditEntry.objects.get(action="estop.release", ok=True)
     assert entry.username == "otto" and "E-STOP engaged by otto" in entry.outcome
     assert operator_api.post("/api/robot/motors/", {"enabled": True}, format="json").status_code == 200
+
+
+async def test_the_link_holds_back_all_that_moves_but_the_stops_own_steps(link, sim):
+    """The last check before the robot, on every publish and service call: a request made
+    before the stop and queued, or sent by a mode change still walking, does not get through."""
+    from robot.link.bus import EstopEngaged, acall_service, apublish, arequest, stopping
+    from robot.navigation.goals import apublish_action, cancel_message, move_base_goal_message
+
+    wait_ready(sim)
+    pose = {"header": {"frame_id": "map"}, "pose": {"position": {"x": 1.0, "y": 1.0, "z": 0.0},
+                                                    "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}}}
+    await arequest("estop")
+    for topic, msg in (("register_event", {"data": "behaviour_start"}), ("register_event", {"data": "aborted"}),
+                       ("robot_mode", {"data": "demo"}), ("robot_mode", {"data": "stop"}),
+                       ("emotional_controller", {"data": "ON"}), ("emotional_controller", {"data": "OFF"}),
+                       ("move_base_simple_goal", pose), ("initialpose", {"header": pose["header"], "pose": pose})):
+        with pytest.raises(EstopEngaged, match=r"E-STOP engaged: refused until an operator releases it \(/"):
+            await apublish(topic, msg)
+    with pytest.raises(EstopEngaged):
+        await apublish_action("move_base", "goal", move_base_goal_message("g1", 1.0, 1.0, 0.0))
+    with pytest.raises(EstopEngaged):
+        await acall_service("enable_motors")
+    with stopping():  # the stop's own way to suspension passes; entering a mode does not, even from it
+        await apublish("register_event", {"data": "aborted"})
+        await apublish("emotional_controller", {"data": "OFF"})
+        with pytest.raises(EstopEngaged):
+            await apublish("register_event", {"data": "demo_start"})
+    await apublish_action("move_base", "cancel", cancel_message())  # what stops passes from anyone
+    await acall_service("disable_motors")
+    await apublish("text_to_speech", {"data": "stopped"})
+    await async_wait_until(lambda: received(sim, "text_to_speech"), what="the speech")
+    assert [m["data"] for m in received(sim, "register_event")] == ["aborted"]
+    assert received(sim, "emotional_controller") == [{"data": "OFF"}]
+    assert received(sim, "robot_mode") == received(sim, "initialpose") == received(sim, "move_base_simple_goal") == []
+    assert sim.received(ri.action_topic("move_base", "goal")[0]) == []
+    assert sim.snapshot()["state"]["motors"] is False
+
+
+async def test_a_mode_change_under_way_sends_nothing_after_the_estop_answers(link, sim, operator):
+    """Behaviour mode requested, the E-STOP pressed 0.05-0.5 s later, 20 times: no event, mode or
+    emotion-system message reaches the robot after the stop's answer, and the robot ends in
+    suspension with its emotion system off."""
+    from robot.commands.modes import achange_mode
+    from robot.link.bus import RobotError
+    from robot.teleop.estop import estop_release, estop_run
+
+    names = [ri.topic(key).name for key in ("register_event", "emotional_controller", "robot_mode")]
+    wait_ready(sim)
+    for run in range(20):
+        await until_the_server_hears(lambda s: s == "suspension", "suspension")
+        change = asyncio.ensure_future(achange_mode(user=operator, source="api", mode=ri.Mode.BEHAVIOUR))
+        await asyncio.sleep(0.05 + 0.45 * run / 19)
+        report = await estop_run(user=operator, source="page")
+        answered = time.time()
+        assert report.ok, report.summary()
+        with contextlib.suppress(RobotError):
+            await change
+        await asyncio.sleep(0.3)  # anything still on its way arrives
+        # The stop's own last message may still be on the wire when it answers (well under 0.1 s).
+        late = [(name, r["msg"], round(r["t"] - answered, 3)) for name in names
+                for r in sim.call(lambda n=name: sim.robot.received_with_times(n)) if r["t"] > answered
+                if r["t"] > answered + 0.1 or not ri.passes_latch(name, r["msg"], by_the_stop=True)]
+        assert late == [], f"run {run + 1}: after the E-STOP's answer the robot got {late}"
+        state = sim.snapshot()["state"]
+        assert state["smach_state"] == "suspension", f"run {run + 1}: {state}"
+        assert received(sim, "emotional_controller")[-1] == {"data": "OFF"}
+        await estop_release(user=operator, source="page", confirm=True)
