@@ -10,6 +10,7 @@ import coverage
 SAFETY = {
     "robot/teleop/estop.py": "E-STOP",
     "robot/commands/latch.py": "latch",
+    "robot/commands/gate.py": "E-STOP gate (what each command does under the latch)",
     "robot/teleop/lock.py": "drive lock",
     "robot/teleop/driver.py": "deadman (teleop loop)",
     "robot/teleop/driving.py": "drive sessions",

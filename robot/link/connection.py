@@ -199,10 +199,13 @@ class RobotLink:
                     await self._wake_list_pop()
                 else:
                     await within(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
-                # The loop ends at the stop message, or after its current pop (a Redis list pop returns
-                # within a second) if another link on the list took the message: a request it took is served.
-                await within(asyncio.shield(self._serving), redisqueue.POP_TIMEOUT_S + 1)
-            except (TimeoutError, Exception):
+            except Exception:
+                log.warning("could not tell the robot link's request loop to stop", exc_info=True)
+            # The loop ends at the stop message, or after its current pop (a Redis list pop returns
+            # within a second) if another link on the list took the message: a request it took is
+            # served. (asyncio.wait: however the loop ended, cancelled or failed, the stop goes on.)
+            _, running = await asyncio.wait({self._serving}, timeout=redisqueue.POP_TIMEOUT_S + 1)
+            if running:
                 log.warning("robot link request loop did not stop in time")
         if self._inflight:
             await asyncio.wait(set(self._inflight), timeout=2)  # answer what it took while the robot is there

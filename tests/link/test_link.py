@@ -1,6 +1,7 @@
 """The robot link against the simulator: real websocket, unmodified roslibpy."""
 
 import asyncio
+import contextlib
 import threading
 
 import pytest
@@ -199,3 +200,13 @@ async def test_a_message_read_on_another_thread_is_handled_on_the_loop(link):
     reader.join()
     await async_wait_until(lambda: ("/not_in_the_registry", threading.get_ident()) in seen, timeout=2)
     assert [ident for name, ident in seen if name == "/not_in_the_registry"] == [threading.get_ident()]
+
+
+async def test_it_stops_cleanly_when_its_request_loop_was_cancelled(link, sim):
+    """A Redis freeze once left the request loop cancelled, and the stop then ended on its
+    CancelledError: the link process exited without zeroing, closing or handing back its lease."""
+    link._serving.cancel()
+    with contextlib.suppress(asyncio.CancelledError):
+        await link._serving
+    await asyncio.wait_for(link.stop(), 10)  # returns, and raises nothing
+    assert link.ros is None and not link.connected
