@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.direct_frames import EXTENSION as FRAMES_EXTENSION
-from cyborg_site.roles import is_operator
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from robot import interface as ri
+from robot.commands.reconnect import reconnect
 from robot.link.bus import RobotError, arequest
 from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
 from robot.live.feed import alocal_hub, keeps_every_message
@@ -145,11 +144,8 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             socket.tracking = None
 
     async def _reconnect(self) -> None:
-        if not await database_sync_to_async(is_operator)(self.scope["user"]):
-            await self.send_json({"kind": "error", "message": "Only operators can reconnect the robot link."})
-            return
         try:
-            await arequest("reconnect", timeout=2)
+            await reconnect(user=self.scope["user"], source="websocket")
             await self.send_json({"kind": "notice", "message": "Reconnecting to the robot…"})
         except RobotError as exc:
             await self.send_json({"kind": "error", "message": exc.message})

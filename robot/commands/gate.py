@@ -53,6 +53,7 @@ MOVES: dict[str, Declaration] = {
     "teleop.lock": always,
     "teleop.takeover": always,
     "audio.listen.start": never,
+    "link.reconnect": never,
     "audio.talk.start": always,  # the E-STOP ends every talk; no new one starts under it
 }
 

@@ -64,8 +64,16 @@ class RobotNotFound(RobotError):
     code = "not_found"
 
 
+class Throttled(RobotError):
+    """Asked again too soon (a reconnect moments after the last)."""
+
+    status_code = 429
+    code = "throttled"
+
+
 _ERRORS: dict[str, type[RobotError]] = {
     "offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged, "not_found": RobotNotFound,
+    "throttled": Throttled,
 }
 
 

@@ -52,6 +52,9 @@ LATCH_SETTLE_S = 3.0  # a stop's store write normally lands within milliseconds
 # After starting (a standby taking over), requests wait this long for the first connection instead of
 # being refused as "robot offline": a rolling restart of the links refuses nothing.
 FIRST_CONNECT_S = 3.0
+# Between two reconnects asked for (the pages' button, the API): more often only flaps the link,
+# and a flapping link cannot carry an E-STOP.
+RECONNECT_INTERVAL_S = 5.0
 REPLY_MARGIN_S = 0.3
 _NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "subscribe", "estop_release"})  # answered at once
 # ROS 1 rosbridge answers a subscription it cannot make (a message package the robot lacks) only on
@@ -152,6 +155,7 @@ class RobotLink:
         self.command_path = True  # until a ping over the request channel goes unanswered
         self.connecting_until = 0.0  # epoch time: until then, a link not yet connected is still connecting
         self._latch_msg: dict[str, Any] = {}
+        self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
     # --- lifecycle -------------------------------------------------------------------
 
@@ -497,6 +501,11 @@ class RobotLink:
     async def execute(self, request: LinkRequest) -> LinkReply:
         op = request.get("op")
         if op == "reconnect":
+            wait = self._asked_reconnect_at + RECONNECT_INTERVAL_S - time.monotonic()
+            if wait > 0:
+                return {"ok": False, "error_code": "throttled",
+                        "error": f"The robot link reconnected moments ago; try again in {max(1, round(wait))} s."}
+            self._asked_reconnect_at = time.monotonic()
             self.reconnect()
             return {"ok": True}
         if op == "subscribe":

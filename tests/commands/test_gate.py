@@ -32,6 +32,7 @@ DECLARED: dict[str, tuple[list[Any], list[Any]]] = {
     "teleop.lock": ([None], []),
     "teleop.takeover": ([None], []),
     "audio.listen.start": ([], [None]),
+    "link.reconnect": ([], [None]),
     "audio.talk.start": ([None], []),
 }
 

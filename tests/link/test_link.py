@@ -110,7 +110,11 @@ async def test_it_drops_requests_that_reach_the_link_after_their_deadline(link, 
     assert sim.robot.received_count(ri.topic("register_event").name) == 0
 
 
-async def test_it_lets_operators_but_not_viewers_reconnect(link, sim, viewer, operator):
+@pytest.mark.django_db(transaction=True)
+async def test_it_lets_operators_but_not_viewers_reconnect_at_most_every_few_seconds_audited(
+        link, sim, viewer, operator):
+    from robot.models import AuditEntry
+
     as_viewer = await watch(viewer)
     await as_viewer.send_json_to({"action": "reconnect"})
     refused = await receive_until(as_viewer, lambda f: f["kind"] == "error")
@@ -119,6 +123,15 @@ async def test_it_lets_operators_but_not_viewers_reconnect(link, sim, viewer, op
     await as_operator.send_json_to({"action": "reconnect"})
     await receive_until(as_operator, lambda f: f["kind"] == "notice")
     await receive_until(as_operator, lambda f: f["kind"] == "status" and f["connected"], timeout=10)
+    since = link.since
+    await as_operator.send_json_to({"action": "reconnect"})  # a page's button pressed again at once
+    again = await receive_until(as_operator, lambda f: f["kind"] == "error")
+    assert again["message"].startswith("The robot link reconnected moments ago; try again in ")
+    await asyncio.sleep(0.5)
+    assert link.connected and link.since == since  # the second press did not drop the connection
+    rows = [(e.username, e.action, e.ok, e.error_code) async for e in AuditEntry.objects.order_by("id")]
+    assert rows == [("vera", "link.reconnect", False, "forbidden"), ("otto", "link.reconnect", True, ""),
+                    ("otto", "link.reconnect", False, "throttled")]
     await as_viewer.disconnect()
     await as_operator.disconnect()
 
