@@ -15,10 +15,10 @@ from django.db import connection
 
 from history.recorder import WATERMARK_KEY, losses
 from robot.api.errors import UNAVAILABLE_TEXT, unavailable
+from robot.live import redis_clients
 from robot.live.state import get_store, link_status
 from robot.supervisor import failing
 
-PING_TIMEOUT_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -44,14 +44,11 @@ def check_redis() -> Check | None:
         return None  # embedded: no Redis in this wiring
     import redis
 
-    client = redis.Redis.from_url(settings.REDIS_URL, socket_connect_timeout=PING_TIMEOUT_S,
-                                  socket_timeout=PING_TIMEOUT_S)
+    # The product's own pooled client: healthy only when what commands use answers.
     try:
-        client.ping()
+        redis_clients.client().ping()
     except (redis.ConnectionError, redis.TimeoutError) as exc:
         return Check("redis", False, f"{UNAVAILABLE_TEXT['redis']}: {exc}")
-    finally:
-        client.close()
     return Check("redis", True)
 
 

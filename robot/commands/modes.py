@@ -36,6 +36,7 @@ from robot.commands.pipeline import Busy, Command, arun
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
 from robot.link import bus
+from robot.live import redis_clients
 from robot.live.announce import apublish_state
 from robot.live.groups import MODE_REQUEST_KEY
 from robot.live.state import redis_key
@@ -227,13 +228,7 @@ def _lock_key() -> str:
 async def change_under_way() -> bool:
     if not settings.REDIS_URL:
         return _local_lock.locked()
-    import redis.asyncio
-
-    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
-    try:
-        return bool(await client.exists(_lock_key()))
-    finally:
-        await client.aclose()
+    return bool(await redis_clients.aclient().exists(_lock_key()))
 
 
 @asynccontextmanager
@@ -256,19 +251,14 @@ async def serialised(mode: ri.Mode) -> AsyncIterator[None]:
 
 @asynccontextmanager
 async def _redis_lock(mode: ri.Mode) -> AsyncIterator[None]:
-    import redis.asyncio
-
     # Expires just after the longest a sequence can take, should this process die holding it.
     ttl_s = longest_change_s(mode) + 1.0
     token = f"{uuid.uuid4().hex}:{mode.short}"
-    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    client = redis_clients.aclient()
+    if not await client.set(_lock_key(), token, nx=True, px=int(ttl_s * 1000)):
+        held = await client.get(_lock_key())
+        raise _busy((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
     try:
-        if not await client.set(_lock_key(), token, nx=True, px=int(ttl_s * 1000)):
-            held = await client.get(_lock_key())
-            raise _busy((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
-        try:
-            yield
-        finally:
-            await client.eval(_RELEASE, 1, _lock_key(), token)
+        yield
     finally:
-        await client.aclose()
+        await client.eval(_RELEASE, 1, _lock_key(), token)

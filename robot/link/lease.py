@@ -14,10 +14,10 @@ import logging
 import time
 import uuid
 
-import redis.asyncio
 from redis.asyncio.lock import Lock
 from redis.exceptions import LockError, LockNotOwnedError, RedisError
 
+from robot.live import redis_clients
 from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
@@ -31,7 +31,7 @@ class Lease:
         self.poll_s = poll_s
         self.token = f"{holder}:{uuid.uuid4().hex}".encode()
         # Every Redis call must come back well inside the lease, or the holder cannot know it still holds it.
-        self.client = redis.asyncio.Redis.from_url(url, socket_timeout=ttl_s / 4, socket_connect_timeout=ttl_s / 4)
+        self.client = redis_clients.new_aclient(url, socket_timeout=ttl_s / 4, socket_connect_timeout=ttl_s / 4)
         self.lock = Lock(self.client, key, timeout=ttl_s, thread_local=False)
         self.lost = asyncio.Event()
         self.acquired_at: float | None = None

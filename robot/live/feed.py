@@ -18,6 +18,7 @@ from typing import Any
 from django.conf import settings
 
 from robot import interface as ri
+from robot.live import redis_clients
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
@@ -48,13 +49,7 @@ def channel() -> str:
 
 
 def _redis() -> Any:
-    import redis.asyncio
-
-    loop = asyncio.get_running_loop()
-    client = _clients.get(loop)
-    if client is None:
-        client = _clients[loop] = redis.asyncio.Redis.from_url(settings.REDIS_URL)
-    return client
+    return redis_clients.aclient()
 
 
 async def announce(update: dict[str, Any]) -> None:
@@ -113,14 +108,14 @@ async def run_subscriber(hub: Hub) -> None:
     """Feed ``hub`` from the Redis channel for as long as the process runs; resubscribe after errors.
     Each time the subscription is in place again, the sockets get every watched key's stored value
     that is newer than what came through before the gap: what was published meanwhile is not lost."""
-    import redis.asyncio
 
     delivered: dict[str, float] = {}  # key -> time of the newest update that came through
     subscribed_before = False
     lost_at: float | None = None
     while True:
         end_if_cancelled()
-        client = redis.asyncio.Redis.from_url(settings.REDIS_URL, client_name=SUBSCRIBER_NAME)
+        # No socket timeout: the subscription waits as long as nothing is published.
+        client = redis_clients.new_aclient(client_name=SUBSCRIBER_NAME, socket_timeout=None)
         try:
             async with client.pubsub() as pubsub:
                 await pubsub.subscribe(channel())

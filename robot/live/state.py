@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import json
 import time
-import weakref
 from collections import deque
 from typing import Any, Protocol
 
 from django.conf import settings
 
 from robot.link.wire import jsonable
+from robot.live import redis_clients
 from robot.live.groups import STATUS_KEY
 
 
@@ -65,25 +65,13 @@ class MemoryStore:
 
 class RedisStore:
     def __init__(self, url: str, name: str) -> None:
-        import redis
-        import redis.asyncio
 
         self._name = name
-        self._sync = redis.Redis.from_url(url)
-        self._async_url = url
-        # Keyed by the loop object, not id(): a new loop may reuse a dead loop's id.
-        self._async_clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
-        self._aioredis = redis.asyncio
+        self._sync = redis_clients.client(url)
+        self._url = url
 
     def _aclient(self) -> Any:
-        # An asyncio client is bound to the loop it was first used on.
-        import asyncio
-
-        loop = asyncio.get_running_loop()
-        client = self._async_clients.get(loop)
-        if client is None:
-            client = self._async_clients[loop] = self._aioredis.Redis.from_url(self._async_url)
-        return client
+        return redis_clients.aclient(self._url)
 
     async def aput(self, key: str, entry: dict[str, Any]) -> None:
         await self._aclient().hset(self._name, key, json.dumps(entry, default=jsonable))

@@ -23,6 +23,7 @@ from robot.teleop.lock import get_lock
 log = logging.getLogger(__name__)
 
 STEP_TIMEOUT_S = 3.0
+ATTEMPT_TIMEOUT_S = STEP_TIMEOUT_S + 2  # a step that outlives its own time-outs is given up on
 
 
 @dataclass(frozen=True)
@@ -100,7 +101,7 @@ STEPS: tuple[tuple[str, Step], ...] = (
 
 async def _attempt(name: str, step: Step, by: str) -> StepResult:
     try:
-        return StepResult(name, True, await asyncio.wait_for(step(by), STEP_TIMEOUT_S + 2))
+        return StepResult(name, True, await asyncio.wait_for(step(by), ATTEMPT_TIMEOUT_S))
     except RobotError as exc:
         return StepResult(name, False, exc.message)
     except TimeoutError:

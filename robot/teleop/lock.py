@@ -8,15 +8,14 @@ it lives in this process; with ``REDIS_URL`` it is a Redis key set with ``SET NX
 
 from __future__ import annotations
 
-import asyncio
 import json
 import time
-import weakref
 from dataclasses import asdict, dataclass
 from typing import Any, Protocol
 
 from django.conf import settings
 
+from robot.live import redis_clients
 from robot.live.state import redis_key
 
 
@@ -104,17 +103,9 @@ _RELEASE = "if redis.call('GET', KEYS[1]) == ARGV[1] then return redis.call('DEL
 class RedisLock:
     def __init__(self, url: str, key: str, ttl_s: float) -> None:
         self.url, self.key, self.ttl_ms = url, key, int(ttl_s * 1000)
-        # An asyncio Redis client belongs to the loop it was first used on.
-        self._clients: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, Any] = weakref.WeakKeyDictionary()
 
     def _client(self) -> Any:
-        import redis.asyncio
-
-        loop = asyncio.get_running_loop()
-        client = self._clients.get(loop)
-        if client is None:
-            client = self._clients[loop] = redis.asyncio.Redis.from_url(self.url)
-        return client
+        return redis_clients.aclient(self.url)
 
     async def holder(self) -> Holder | None:
         return Holder.decode(await self._client().get(self.key))
