@@ -20,7 +20,6 @@ from robot.live.state import get_store, link_status
 from robot.supervisor import failing
 
 
-
 @dataclass(frozen=True)
 class Check:
     name: str

@@ -35,7 +35,8 @@ async def test_a_step_that_hangs_or_breaks_is_reported_and_every_other_step_stil
     assert sorted(ran) == ["drive_lock", "mode_stop", "talk", "zero_velocity"]
     assert [(s.step, s.ok, s.detail) for s in report.steps] == [
         ("latch", True, report.steps[0].detail), ("zero_velocity", True, "zero sent for otto"),
-        ("drive_lock", False, "timed out"), ("talk", False, "KeyError: 'speaker'"), ("mode_stop", True, "stopped for otto"),
+        ("drive_lock", False, "timed out"), ("talk", False, "KeyError: 'speaker'"),
+        ("mode_stop", True, "stopped for otto"),
     ]
     entry = await AuditEntry.objects.aget(action="estop")
     assert (entry.ok, entry.error_code) == (False, "partial") and "drive_lock: FAILED (timed out)" in entry.outcome
