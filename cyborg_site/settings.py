@@ -22,6 +22,8 @@ from cyborg_site.env import (
 
 BASE_DIR = Path(__file__).resolve().parent.parent
 VAR_DIR = Path(env_str("VAR_DIR", str(BASE_DIR / "var")))
+# Audit entries the database could not take wait here until it can (robot.commands.audit_journal).
+AUDIT_JOURNAL_DIR = Path(env_str("AUDIT_JOURNAL_DIR", str(VAR_DIR / "audit-journal")))
 
 DEBUG = env_bool("DEBUG", False)
 SECRET_KEY = env_str("SECRET_KEY") or ("insecure-dev-key-only-for-local-use" if DEBUG else "")
@@ -75,6 +77,8 @@ MIDDLEWARE = [
     "django.middleware.common.CommonMiddleware",
     "django.middleware.csrf.CsrfViewMiddleware",
     "django.contrib.auth.middleware.AuthenticationMiddleware",
+    # An operator's signed E-STOP pass, for pressing it while the database is down.
+    "robot.api.estop_access.EstopPassMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",

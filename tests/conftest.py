@@ -189,13 +189,17 @@ def django_db_setup(django_db_setup):
 
 
 @pytest.fixture(autouse=True)
-def _audit_writer_connection_closed():
+def _audit_writer_connection_closed(settings, tmp_path):
     """The audit writer keeps its connection between writes; a test ends with it closed, so the
-    next test's flush and the test database's drop meet no other session."""
-    yield
+    next test's flush and the test database's drop meet no other session. Each test has an audit
+    journal of its own, and starts with the writer up."""
     from robot.commands.audit_writer import writer
 
+    settings.AUDIT_JOURNAL_DIR = tmp_path / "audit-journal"
+    writer.down = False
+    yield
     writer.close_connection()
+    writer.down = False
 
 
 @pytest.fixture(autouse=True)

@@ -15,6 +15,7 @@ from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, run
 from robot.api.common import error_responses
+from robot.api.estop_access import ESTOP_AUTHENTICATION
 from robot.commands.latch import alatch
 from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
 
@@ -49,6 +50,7 @@ class ReleaseInputSerializer(serializers.Serializer):
 
 
 class EstopView(RobotAPIView):  # never throttled: a stop always goes through
+    authentication_classes = ESTOP_AUTHENTICATION  # works with the database down
 
     @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
     def get(self, request: Request) -> Response:
@@ -80,6 +82,7 @@ class EstopView(RobotAPIView):  # never throttled: a stop always goes through
 
 
 class EstopReleaseView(RobotAPIView):
+    authentication_classes = ESTOP_AUTHENTICATION
 
     @extend_schema(
         request=ReleaseInputSerializer,

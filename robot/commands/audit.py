@@ -13,7 +13,7 @@ def audit_record(
 ) -> AuditEntry:
     authenticated = user is not None and getattr(user, "is_authenticated", False)
     return AuditEntry.objects.create(
-        user=user if authenticated else None,
+        user_id=user.pk if authenticated else None,  # (an E-STOP pass user is not a model instance)
         username=user.get_username() if authenticated else "",
         source=source,
         action=action,

@@ -6,8 +6,11 @@ asynchronous face's audit rows go to one worker thread whose connection stays op
 writes and is closed after ``IDLE_CLOSE_S`` without any, so a quiet server holds none.
 
 A write is never dropped and never fails silently: it runs even when its caller was cancelled,
-a failure is logged here and raised to the caller (the API answers 503), and a write that meets
-a kept connection the database has since dropped is retried once on a new one.
+and a write that meets a kept connection the database has since dropped is retried once on a new
+one. While the database is down an entry goes to the journal on disk (``audit_journal``) and the
+writer is ``down``: the pipeline refuses every command but the E-STOP and its release until the
+thread, probing every ``PROBE_S``, has written the journal to the database. Any other failure is
+logged here and raised to the caller.
 """
 
 from __future__ import annotations
@@ -21,12 +24,14 @@ from typing import Any
 
 from django.db import InterfaceError, OperationalError, connection
 
+from robot.commands import audit_journal
 from robot.commands.audit import audit_record
 from robot.models import AuditEntry
 
 log = logging.getLogger(__name__)
 
 IDLE_CLOSE_S = 10.0
+PROBE_S = 1.0
 
 _Job = tuple[Future, dict[str, Any] | None]  # no fields: close the connection
 
@@ -50,14 +55,37 @@ class AuditWriter:
         self._thread: threading.Thread | None = None
         self._start = threading.Lock()
         self.writes = 0  # jobs handed to the thread: one thread crossing each
+        self.down = False  # entries are being journaled: the database did not take the last one
 
-    async def record(self, **fields: Any) -> AuditEntry:
-        """``audit_record(**fields)`` on the writer's thread."""
+    async def record(self, **fields: Any) -> AuditEntry | None:
+        """``audit_record(**fields)`` on the writer's thread (None: journaled, the database is down)."""
         future: Future[AuditEntry] = Future()
         self._ensure_thread()
         self.writes += 1
         self._jobs.put((future, fields))
         return await asyncio.shield(asyncio.wrap_future(future))
+
+    def record_here(self, **fields: Any) -> AuditEntry | None:
+        """``audit_record(**fields)`` in the caller's thread (the synchronous face), journaled likewise."""
+        try:
+            return audit_record(**fields)
+        except (OperationalError, InterfaceError):
+            self._keep(fields)
+            self._ensure_thread()  # it probes the database and writes the journal when it is back
+            return None
+
+    def _keep(self, fields: dict[str, Any]) -> None:
+        audit_journal.keep(fields)
+        self.down = True
+
+    def _recover(self) -> None:
+        try:
+            audit_journal.replay()
+        except (OperationalError, InterfaceError):
+            connection.close()
+            return
+        self.down = False
+        log.info("audit: the database is back; commands are accepted again")
 
     def close_connection(self, timeout: float = 10.0) -> None:
         """Close the writer's connection now (e.g. before a test database is dropped)."""
@@ -76,9 +104,12 @@ class AuditWriter:
     def _run(self) -> None:
         while True:
             try:
-                future, fields = self._jobs.get(timeout=self.idle_close_s)
+                future, fields = self._jobs.get(timeout=PROBE_S if self.down else self.idle_close_s)
             except queue.Empty:
-                connection.close()
+                if self.down:
+                    self._recover()
+                else:
+                    connection.close()
                 continue
             if fields is None:
                 connection.close()
@@ -86,6 +117,15 @@ class AuditWriter:
                 continue
             try:
                 result = _write(fields)
+            except (OperationalError, InterfaceError):
+                connection.close()
+                try:
+                    self._keep(fields)
+                except BaseException as exc:
+                    log.exception("audit: the entry for %s was neither written nor journaled", fields.get("action"))
+                    _settle(future, exception=exc)
+                else:
+                    _settle(future, result=None)
             except BaseException as exc:
                 connection.close()
                 log.exception("audit: the entry for %s by %s was not written", fields.get("action"),

@@ -30,13 +30,15 @@ from typing import Any
 from asgiref.sync import async_to_sync, sync_to_async
 
 from cyborg_site.roles import is_operator, roles_cached
-from robot.commands.audit import audit_record
 from robot.commands.audit_writer import writer
 from robot.commands.gate import Declaration, declaration
 from robot.commands.latch import ensure_released
 from robot.link.bus import RobotError, stopping
 
 _record = writer.record
+_record_here = writer.record_here
+# Run while the audit cannot be written (its entries journaled meanwhile); every other command waits.
+UNAUDITED_OK = frozenset({"estop", "estop.release"})
 
 
 class Forbidden(RobotError):
@@ -51,6 +53,11 @@ class InvalidCommand(RobotError):
     def __init__(self, message: str, *, field: str | None = None) -> None:
         super().__init__(message)
         self.field = field
+
+
+class AuditUnavailable(RobotError):
+    status_code = 503
+    code = "unavailable"
 
 
 class Busy(RobotError):
@@ -89,9 +96,13 @@ class Command:
 
 
 async def _send(command: Command, checked: Any) -> str:
-    """``send``, unless the E-STOP holds back what the command would do. A command that does not
-    move the robot may stop it further (mode stop, the emotion system off): the link lets those
-    of its requests through the latch (``bus.stopping``) and, by their content, nothing else."""
+    """``send``, unless the E-STOP holds back what the command would do, or it could not be
+    audited. A command that does not move the robot may stop it further (mode stop, the emotion
+    system off): the link lets those of its requests through the latch (``bus.stopping``) and,
+    by their content, nothing else."""
+    if writer.down and command.action not in UNAUDITED_OK:
+        raise AuditUnavailable("The audit log cannot be written (the database is not reachable): commands are "
+                               "refused until it can. The E-STOP still works.")
     if command.moves(checked):
         await ensure_released()
         return await command.send(checked) or "ok"
@@ -107,12 +118,12 @@ def _prepare(command: Command, audit: dict[str, Any]) -> Any:
     """Role check, then ``check``: what ``send`` gets; a refusal or bad input is audited and raised."""
     if not command.allowed(audit["user"]):
         error = Forbidden(command.refusal)
-        audit_record(**audit, ok=False, outcome=error.message, error_code=error.code)
+        _record_here(**audit, ok=False, outcome=error.message, error_code=error.code)
         raise error
     try:
         return command.check()
     except RobotError as exc:
-        audit_record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
+        _record_here(**audit, ok=False, outcome=exc.message, error_code=exc.code)
         raise
 
 
@@ -126,9 +137,9 @@ def run_command(command: Command, *, user: Any, source: str) -> str:
     try:
         outcome = async_to_sync(_send)(command, checked)
     except RobotError as exc:
-        audit_record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
+        _record_here(**audit, ok=False, outcome=exc.message, error_code=exc.code)
         raise
-    audit_record(**audit, ok=True, outcome=outcome)
+    _record_here(**audit, ok=True, outcome=outcome)
     return outcome
 
 

@@ -1,0 +1,132 @@
+"""Who may press the E-STOP when the database, which knows every session and token, is down.
+
+- A page: every response to an operator's request carries a signed *E-STOP pass* cookie (their
+  id, name and password hash's fingerprint; signed with the server's key, so every web process
+  can read it without a query). Logging out, or losing the role, removes it on the next response.
+- A script: a token this process has trusted before counts, however long ago.
+
+Both are tried only when the normal way meets a database that is down, only by the E-STOP views,
+and with the usual CSRF check for the cookie. What such a press does is audited like any other
+(journaled until the database returns).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from django.conf import settings
+from django.core import signing
+from django.db import InterfaceError, OperationalError
+from django.http import HttpRequest, HttpResponseBase
+from rest_framework.authentication import SessionAuthentication
+from rest_framework.request import Request
+
+from cyborg_site.roles import Role, is_operator, roles_cached
+from robot.api.tokens import CachedTokenAuthentication
+
+COOKIE = "cyborg_estop_pass"
+_SALT = "cyborg.estop-pass"
+_DATABASE_DOWN = (OperationalError, InterfaceError)
+
+
+@dataclass
+class PassUser:
+    """An operator known from their E-STOP pass or a trusted token, while the database is down."""
+
+    pk: int
+    username: str
+    is_authenticated: bool = True
+    is_anonymous: bool = False
+    is_active: bool = True
+    is_superuser: bool = False
+    _role_groups: set[str] = field(default_factory=lambda: {Role.OPERATOR.value})
+
+    @property
+    def id(self) -> int:
+        return self.pk
+
+    def get_username(self) -> str:
+        return self.username
+
+
+def _fingerprint(user: Any) -> str:
+    return user.get_session_auth_hash()[:16]
+
+
+def _pass_for(user: Any) -> dict[str, Any]:
+    return {"u": user.pk, "n": user.get_username(), "h": _fingerprint(user)}
+
+
+def pass_user(request: HttpRequest) -> PassUser | None:
+    raw = request.COOKIES.get(COOKIE)
+    if not raw:
+        return None
+    try:
+        data = signing.loads(raw, salt=_SALT, max_age=settings.SESSION_COOKIE_AGE)
+    except signing.BadSignature:
+        return None
+    return PassUser(pk=int(data["u"]), username=str(data["n"]))
+
+
+class EstopPassMiddleware:
+    """Keeps the pass cookie in step with the session: set for an operator (once the request has
+    loaded the user and their roles anyway), removed for anyone else."""
+
+    def __init__(self, get_response: Callable[[HttpRequest], HttpResponseBase]) -> None:
+        self.get_response = get_response
+
+    def __call__(self, request: HttpRequest) -> HttpResponseBase:
+        response = self.get_response(request)
+        user = getattr(request, "_cached_user", None)  # loaded by this request: no query of ours
+        if user is None or isinstance(user, PassUser):
+            return response
+        current = request.COOKIES.get(COOKIE)
+        if user.is_authenticated and roles_cached(user) and is_operator(user):
+            held = pass_user(request) if current else None
+            if held is None or held.pk != user.pk or _stale(current, user):
+                response.set_cookie(
+                    COOKIE, signing.dumps(_pass_for(user), salt=_SALT), max_age=settings.SESSION_COOKIE_AGE,
+                    secure=settings.SESSION_COOKIE_SECURE, httponly=True, samesite="Lax")
+        elif current and (not user.is_authenticated or roles_cached(user)):
+            response.delete_cookie(COOKIE, samesite="Lax")
+        return response
+
+
+def _stale(raw: str | None, user: Any) -> bool:
+    try:
+        data = signing.loads(raw or "", salt=_SALT)
+    except signing.BadSignature:
+        return True
+    return bool(data.get("h") != _fingerprint(user) or data.get("n") != user.get_username())
+
+
+class EstopSessionAuthentication(SessionAuthentication):
+    def authenticate(self, request: Request) -> tuple[Any, Any] | None:
+        try:
+            return super().authenticate(request)
+        except _DATABASE_DOWN:
+            user = pass_user(request._request)
+            if user is None:
+                raise
+            self.enforce_csrf(request)
+            return user, None
+
+
+class EstopTokenAuthentication(CachedTokenAuthentication):
+    def authenticate_credentials(self, key: str) -> tuple[Any, Any]:
+        try:
+            return super().authenticate_credentials(key)
+        except _DATABASE_DOWN:
+            hit = self._cache.get(key)
+            if hit is None:
+                raise
+            user = hit[1]
+            if not (roles_cached(user) and is_operator(user)):
+                raise
+            return user, hit[2]
+
+
+# Token first, as everywhere in the API (an anonymous caller gets 401 with WWW-Authenticate).
+ESTOP_AUTHENTICATION = [EstopTokenAuthentication, EstopSessionAuthentication]

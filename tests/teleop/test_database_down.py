@@ -1,0 +1,104 @@
+"""The E-STOP with the database down, for real (a private PostgreSQL stopped and started): a page's
+session and a script's token still stop the robot, every other command is refused before it
+reaches the robot, and every one of them is audited once the database returns."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import time
+import urllib.request
+
+import pytest
+
+from robot import interface as ri
+from tests.deploy.topology import PrivatePostgres, _as_postgres
+from tests.helpers import wait_until
+from tests.stack import PASSWORD, Stack
+from tests.support_processes import Client, received
+
+
+@pytest.fixture
+def stack():
+    postgres = PrivatePostgres().start()
+    subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port),
+                                 "-U", "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
+    running = Stack(env={"DATABASE_URL": postgres.url})
+    running.postgres = postgres
+    try:
+        running.start()
+        running.wait_robot_online(timeout=40)
+        yield running
+    finally:
+        running.stop()
+        postgres.remove()
+
+
+class Script:
+    """A script with an API token."""
+
+    def __init__(self, stack: Stack, username: str) -> None:
+        self.url = stack.url
+        self.token = self._call("POST", "/api/auth/token/", {"username": username, "password": PASSWORD},
+                                auth=False)[1]["token"]
+
+    def post(self, path: str, body: dict | None = None) -> tuple[int, dict]:
+        return self._call("POST", path, body or {})
+
+    def _call(self, method: str, path: str, body: dict, auth: bool = True) -> tuple[int, dict]:
+        headers = {"Content-Type": "application/json", **({"Authorization": f"Token {self.token}"} if auth else {})}
+        request = urllib.request.Request(f"{self.url}{path}", data=json.dumps(body).encode(), method=method,
+                                         headers=headers)
+        try:
+            with urllib.request.urlopen(request, timeout=10) as res:
+                return res.status, json.loads(res.read())
+        except urllib.error.HTTPError as err:
+            return err.code, json.loads(err.read() or b"{}")
+
+
+def _zero_within(stack: Stack, pressed: float, within_s: float) -> bool:
+    zero = [m for m in received(stack) if m["t"] >= pressed and ri.is_zero_twist(m["msg"])]
+    return bool(zero) and zero[0]["t"] - pressed <= within_s
+
+
+def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_is_down(stack):
+    page, script = Client(stack, "otto"), Script(stack, "olga")
+    assert script.post("/api/robot/speech/", {"text": "before"})[0] == 200  # the token is now trusted
+    speech = ri.topic("text_to_speech").name
+    said = len(received(stack, speech))
+
+    stack.postgres.stop()
+    pressed = time.time()
+    status, body = page.post("/api/robot/estop/")
+    assert status == 200 and all(step["ok"] for step in body["steps"]), body
+    assert body["latch"]["by"] == "otto"
+    wait_until(lambda: _zero_within(stack, pressed, 0.5), timeout=5, what="a zero Twist within 500 ms of the press")
+    for path, payload in (("/api/robot/speech/", {"text": "unaudited"}), ("/api/robot/motors/", {"enabled": False}),
+                          ("/api/robot/mode/", {"mode": "stop"})):
+        status, body = script.post(path, payload)
+        assert (status, body["code"]) == (503, "unavailable"), (path, body)
+    status, body = script.post("/api/robot/estop/release/", {"confirm": True})
+    assert status == 200 and not body["latched"], body
+    pressed = time.time()
+    status, body = script.post("/api/robot/estop/")
+    assert status == 200 and body["latch"]["by"] == "olga", body
+    wait_until(lambda: _zero_within(stack, pressed, 0.5), timeout=5, what="a zero Twist within 500 ms of the press")
+    assert len(received(stack, speech)) == said  # nothing refused reached the robot
+
+    stack.postgres.start()
+    rows: list[tuple] = []
+
+    def audited() -> bool:
+        status, body = page.get("/api/audit/?limit=20")
+        rows[:] = [(r["username"], r["action"], r["ok"], r["error_code"]) for r in reversed(body.get("results", []))]
+        return status == 200 and len(rows) == 7
+
+    wait_until(audited, timeout=20, what="the journaled audit entries")
+    assert rows == [
+        ("olga", "speech", True, ""), ("otto", "estop", True, ""), ("olga", "speech", False, "unavailable"),
+        ("olga", "motors", False, "unavailable"), ("olga", "mode", False, "unavailable"),
+        ("olga", "estop.release", True, ""), ("olga", "estop", True, ""),
+    ]
+    wait_until(lambda: script.post("/api/robot/estop/release/", {"confirm": True})[0] == 200, timeout=10,
+               what="commands accepted again")
+    assert script.post("/api/robot/speech/", {"text": "after"})[0] == 200
