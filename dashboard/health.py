@@ -66,7 +66,16 @@ def check_command_path() -> Check | None:
     return Check("command_path", True)
 
 
-CHECKS: list[Callable[[], Check | None]] = [check_database, check_redis, check_command_path]
+def check_audit() -> Check:
+    """Entries are being journaled: every command but the E-STOP is refused until they are written."""
+    from robot.commands.audit_writer import writer
+
+    if writer.down:
+        return Check("audit", False, "the audit log cannot be written: commands are refused, the E-STOP works")
+    return Check("audit", True)
+
+
+CHECKS: list[Callable[[], Check | None]] = [check_database, check_redis, check_command_path, check_audit]
 
 
 def health_report() -> dict[str, Any]:

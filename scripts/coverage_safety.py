@@ -11,6 +11,8 @@ SAFETY = {
     "robot/teleop/estop.py": "E-STOP",
     "robot/commands/latch.py": "latch",
     "robot/commands/gate.py": "E-STOP gate (what each command does under the latch)",
+    "robot/api/estop_access.py": "E-STOP access with the database down",
+    "robot/commands/audit_journal.py": "audit journal (the E-STOP's audit with the database down)",
     "robot/teleop/lock.py": "drive lock",
     "robot/teleop/driver.py": "deadman (teleop loop)",
     "robot/teleop/driving.py": "drive sessions",

@@ -189,16 +189,19 @@ def django_db_setup(django_db_setup):
 
 
 @pytest.fixture(autouse=True)
-def _audit_writer_connection_closed(settings, tmp_path):
+def _audit_writer_connection_closed(tmp_path):
     """The audit writer keeps its connection between writes; a test ends with it closed, so the
     next test's flush and the test database's drop meet no other session. Each test has an audit
-    journal of its own, and starts with the writer up."""
+    journal of its own, and starts with the writer up. (override_settings, not the settings
+    fixture: that one, set up this early, would be undone after the other fixtures' teardown.)"""
+    from django.test import override_settings
+
     from robot.commands.audit_writer import writer
 
-    settings.AUDIT_JOURNAL_DIR = tmp_path / "audit-journal"
     writer.down = False
-    yield
-    writer.close_connection()
+    with override_settings(AUDIT_JOURNAL_DIR=tmp_path / "audit-journal"):
+        yield
+        writer.close_connection()
     writer.down = False
 
 

@@ -16,6 +16,7 @@ from tests.deploy.topology import PrivatePostgres, _as_postgres
 from tests.helpers import wait_until
 from tests.stack import PASSWORD, Stack
 from tests.support_processes import Client, received
+from tests.teleop.test_redis_fault import healthz
 
 
 @pytest.fixture
@@ -84,6 +85,8 @@ def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_i
     assert status == 200 and body["latch"]["by"] == "olga", body
     wait_until(lambda: _zero_within(stack, pressed, 0.5), timeout=5, what="a zero Twist within 500 ms of the press")
     assert len(received(stack, speech)) == said  # nothing refused reached the robot
+    status, health = healthz(stack)
+    assert status == 503 and {"database", "audit"} <= set(health["down"]), health
 
     stack.postgres.start()
     rows: list[tuple] = []
@@ -102,3 +105,4 @@ def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_i
     wait_until(lambda: script.post("/api/robot/estop/release/", {"confirm": True})[0] == 200, timeout=10,
                what="commands accepted again")
     assert script.post("/api/robot/speech/", {"text": "after"})[0] == 200
+    assert healthz(stack)[0] == 200
