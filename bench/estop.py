@@ -34,8 +34,9 @@ from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
 from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
 from tests.browser.support import login as page_login  # noqa: E402
+from tests.deploy.topology import PrivatePostgres, _as_postgres  # noqa: E402
 from tests.stack import Stack  # noqa: E402
-from tests.support_processes import PrivateRedis  # noqa: E402
+from tests.support_processes import Client, PrivateRedis, received  # noqa: E402
 
 TRIALS = 10
 MOTION_WINDOW_S = 5.0
@@ -204,6 +205,42 @@ def mode_race(stack: Stack) -> list[int]:
     return late
 
 
+DB_DOWN_PRESSES = 50
+
+
+def presses_with_the_database_down() -> list[bool]:
+    """Embedded stack on a private PostgreSQL, which is stopped: an operator's page presses the
+    E-STOP (and releases it) 50 times; a press is ok when it answers 200 and the robot gets a
+    zero Twist within 500 ms of it."""
+    import subprocess
+
+    from robot import interface as ri
+
+    postgres = PrivatePostgres().start()
+    subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port), "-U",
+                                 "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
+    results: list[bool] = []
+    try:
+        with Stack(env={"DATABASE_URL": postgres.url}) as stack:
+            stack.wait_robot_online(timeout=40)
+            page = Client(stack, "otto")
+            postgres.stop()
+            for _ in range(DB_DOWN_PRESSES):
+                pressed = time.time()
+                status, _ = page.post("/api/robot/estop/")
+                deadline = time.monotonic() + 1.0
+                zero = False
+                while not zero and time.monotonic() < deadline:
+                    zero = any(m["t"] >= pressed and m["t"] - pressed <= 0.5 and ri.is_zero_twist(m["msg"])
+                               for m in received(stack)[-20:])
+                    time.sleep(0.02)
+                results.append(status == 200 and zero)
+                page.post("/api/robot/estop/release/", {"confirm": True})
+    finally:
+        postgres.remove()
+    return results
+
+
 def banner_on_all_pages(stack: Stack) -> list[float]:
     from playwright.sync_api import sync_playwright
 
@@ -275,6 +312,7 @@ def main() -> None:
         stopped = asyncio.run(stop_while_driving(stack))
         race = mode_race(stack)
         banners = banner_on_all_pages(stack)
+    db_down = presses_with_the_database_down()
     # The killed process's driver keeps the drive lock until it expires: make that quick.
     redis = PrivateRedis().start()
     try:
@@ -292,6 +330,8 @@ def main() -> None:
     print(f"motion_after_estop_twists: {sum(stopped['motion'])}")
     print(f"web_kill_to_zero_twist_ms: {max(kills):.1f}")
     print(f"estop_race_events_after_answer: {sum(race)}")
+    print(f"estop_db_down_ok_pct: {100 * sum(db_down) / len(db_down):.1f}")
+    print(f"estop_db_down_presses: {len(db_down)}")
     print(f"estop_race_runs: {len(race)}")
     print(f"estop_trials: {len(stopped['zero'])}")
     print(f"estop_banner_samples: {len(banners)}")
