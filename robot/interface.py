@@ -340,6 +340,11 @@ SPEAKER_CODING = "wave"
 SPEAKER_CHUNK_MS = (20, 100)
 
 
+# Sound (the microphone, the speaker): heard only through the audio socket, by operators, audited;
+# never echoed on the topics page or watched as a key, whatever topic carries it.
+SOUND_TYPES: frozenset[str] = frozenset({"audio_common_msgs/AudioData", "audio_common_msgs/msg/AudioData"})
+
+
 def speaker_info() -> dict[str, object]:
     """The AudioInfo message declaring what goes out on the speaker topic."""
     return {"channels": SPEAKER_CHANNELS, "sample_rate": SPEAKER_RATE_HZ, "sample_format": SPEAKER_SAMPLE_FORMAT,

@@ -74,6 +74,7 @@ class AudioSession:
         self.pacer = Pacer()
         self.told_idle = False
         self._tasks: list[asyncio.Task] = []
+        self._renewing: asyncio.Task | None = None
 
     # --- lifecycle ---------------------------------------------------------------------
 
@@ -130,11 +131,14 @@ class AudioSession:
         await self.mic_group(True)
         await self.send_json({"type": "format", **fmt})
         await self.send_json({"type": "listening", "on": True})
-        self._tasks.append(asyncio.ensure_future(self._renew()))
+        self._renewing = asyncio.ensure_future(self._renew())
+        self._tasks.append(self._renewing)
 
     async def _renew(self) -> None:
-        while self.listening_since is not None:
+        while True:
             await asyncio.sleep(LISTEN_RENEW_S)
+            if self.listening_since is None:
+                return
             try:
                 await arequest("audio_listen", listener=self.me.owner, on=True)
             except RobotError as exc:
@@ -144,6 +148,10 @@ class AudioSession:
         since, self.listening_since = self.listening_since, None
         if since is None:
             return
+        renewing, self._renewing = self._renewing, None
+        if renewing is not None:  # ended before the lease is given back: no renewal may follow it
+            renewing.cancel()
+            await asyncio.wait({renewing}, timeout=1)
         await self.mic_group(False)
         try:
             await arequest("audio_listen", listener=self.me.owner, on=False)

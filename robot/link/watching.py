@@ -96,6 +96,10 @@ class Watches:
             except TopicRefused as exc:
                 refused[name] = {"code": exc.code, "error": exc.message}
                 continue
+            if msg_type in ri.SOUND_TYPES:
+                refused[name] = {"code": "forbidden", "error": f"{name} carries sound: listen on the drive page "
+                                                               "(operators; audited)"}
+                continue
             new = name not in self.leases
             self.leases.setdefault(name, {})[holder] = time.monotonic() + WATCH_LEASE_S
             self.idle_since.pop(name, None)

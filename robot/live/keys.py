@@ -64,7 +64,7 @@ _BULKY_TYPES = {"nav_msgs/OccupancyGrid"}
 
 
 def watchable_keys() -> set[str]:
-    return {t.key for t in ri.topics() if t.type not in _BULKY_TYPES} | SERVER_KEYS
+    return {t.key for t in ri.topics() if t.type not in _BULKY_TYPES | ri.SOUND_TYPES} | SERVER_KEYS
 
 
 def upstream_topics(key: str) -> tuple[str, ...]:

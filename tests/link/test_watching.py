@@ -114,6 +114,23 @@ async def test_unknown_topics_and_bad_names_get_a_clear_error_and_never_reach_th
         await LocalWatches().watch("someone", "/no/such_topic")
 
 
+async def test_sound_is_never_echoed_on_the_topics_page_nor_watched_as_a_key(link, sim, viewer, operator):
+    """Listening goes through the audio socket (operators, audited); the topics page once gave a
+    viewer the start of every microphone chunk."""
+    for user in (viewer, operator):
+        for name in (ri.topic("audio").name, ri.topic("speaker").name):
+            page = await open_topic(user, name)
+            error = await receive_until(page, lambda f: f["kind"] == "error", timeout=10)
+            assert error["code"] == "forbidden" and "carries sound" in error["message"], error
+            await page.send_json_to({"action": "watch", "keys": ["audio", "speaker"]})
+            error = await receive_until(page, lambda f: f["kind"] == "error", timeout=5)
+            assert "audio" in error["message"] and "speaker" in error["message"]
+            await page.disconnect()
+    await asyncio.sleep(0.3)
+    assert sim.subscription_count(ri.topic("audio").name) == 0
+    assert not watches_of(link).leases
+
+
 async def test_large_messages_are_summarised(link, sim, viewer):
     page = await open_topic(viewer, ri.topic("map").name)
     frame = await receive_until(page, is_echo(ri.topic("map").name), timeout=15)
