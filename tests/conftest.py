@@ -201,8 +201,8 @@ def _audit_writer_connection_closed(tmp_path):
     writer.down = False
     with override_settings(AUDIT_JOURNAL_DIR=tmp_path / "audit-journal"):
         yield
+        writer.down = False  # no probe after the test
         writer.close_connection()
-    writer.down = False
 
 
 @pytest.fixture(autouse=True)
