@@ -126,15 +126,24 @@ class Upstream:
         self.task.cancel()
 
 
+# A request for a size or quality nobody else watches opens a stream on the robot's video server;
+# past this many in a process, it shares the camera's own size instead (each costs the robot an encoder).
+MAX_UPSTREAMS = 4
+SIZE_PARAMS = ("width", "height", "quality")
+
+
 class VideoRelay:
     """The upstream streams of one event loop, keyed by their parameters."""
 
-    def __init__(self) -> None:
+    def __init__(self, max_upstreams: int = MAX_UPSTREAMS) -> None:
         self.upstreams: dict[StreamKey, Upstream] = {}
+        self.max_upstreams = max_upstreams
 
     async def join(self, base_url: str, params: dict[str, Any]) -> Viewer:
         """Join (or open) the upstream for ``params``; UpstreamError when the video server is down."""
         key: StreamKey = tuple(sorted((k, str(v)) for k, v in params.items()))
+        if key not in self.upstreams and len(self.upstreams) >= self.max_upstreams:
+            key = tuple((k, v) for k, v in key if k not in SIZE_PARAMS)
         upstream = self.upstreams.get(key)
         if upstream is None or upstream.task.done():
             upstream = self.upstreams[key] = Upstream(base_url, key)

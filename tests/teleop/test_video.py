@@ -133,6 +133,23 @@ async def test_many_viewers_share_one_upstream_stream_closed_after_the_last_leav
     await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="the upstream stream closed")
 
 
+async def test_a_viewer_asking_for_many_sizes_opens_a_bounded_number_of_streams_on_the_robot(video, viewer):
+    """30 distinct widths once opened 30 MJPEG streams on the robot's video server."""
+    from dashboard.videorelay import MAX_UPSTREAMS
+
+    cookie = await asyncio.to_thread(session_cookie, viewer)
+    apps = []
+    for width in range(100, 400, 10):
+        app, _ = await open_stream_with_query("/video/stream", cookie, f"width={width}".encode())
+        await read_frames(app, 1)
+        apps.append(app)
+    assert upstream_streams(video) == MAX_UPSTREAMS + 1  # the first few sizes, then the camera's own
+    for app in apps:
+        await app.send_input({"type": "http.disconnect"})
+        await app.wait(timeout=5)
+    await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="every upstream stream closed")
+
+
 async def open_stream_with_query(path: str, cookie: bytes, query: bytes) -> tuple[ApplicationCommunicator, dict]:
     from cyborg_site.asgi import application
 
