@@ -5,8 +5,8 @@
   can read it without a query). Logging out, or losing the role, removes it on the next response.
 - A script: a token this process has trusted before counts, however long ago.
 
-Both are tried only when the normal way meets a database that is down, only by the E-STOP views,
-and with the usual CSRF check for the cookie. What such a press does is audited like any other
+Both are tried only when the normal way meets a database that is down, only by the E-STOP views
+(``EstopAccessMixin``), and with the usual CSRF check for the cookie. What such a press does is audited like any other
 (journaled until the database returns).
 """
 
@@ -102,31 +102,37 @@ def _stale(raw: str | None, user: Any) -> bool:
     return bool(data.get("h") != _fingerprint(user) or data.get("n") != user.get_username())
 
 
-class EstopSessionAuthentication(SessionAuthentication):
-    def authenticate(self, request: Request) -> tuple[Any, Any] | None:
+class EstopAccessMixin:
+    """For the E-STOP views: their usual authentication (token, then session), and when that meets
+    a database that is down, a token this process trusted before or the operator's pass cookie
+    (with the CSRF check a session gets)."""
+
+    def perform_authentication(self, request: Request) -> None:
         try:
-            return super().authenticate(request)
+            super().perform_authentication(request)  # type: ignore[misc]
         except _DATABASE_DOWN:
-            user = pass_user(request._request)
-            if user is None:
+            if not _known_without_database(request):
                 raise
-            self.enforce_csrf(request)
-            return user, None
 
 
-class EstopTokenAuthentication(CachedTokenAuthentication):
-    def authenticate_credentials(self, key: str) -> tuple[Any, Any]:
-        try:
-            return super().authenticate_credentials(key)
-        except _DATABASE_DOWN:
-            hit = self._cache.get(key)
-            if hit is None:
-                raise
-            user = hit[1]
-            if not (roles_cached(user) and is_operator(user)):
-                raise
-            return user, hit[2]
+def _known_without_database(request: Request) -> bool:
+    scheme, _, key = request.META.get("HTTP_AUTHORIZATION", "").partition(" ")
+    if scheme.lower() == CachedTokenAuthentication.keyword.lower():
+        hit = CachedTokenAuthentication._cache.get(key.strip())  # however long ago
+        if hit is None or not (roles_cached(hit[1]) and is_operator(hit[1])):
+            return False
+        _authenticated(request, CachedTokenAuthentication(), hit[1], hit[2])
+        return True
+    user = pass_user(request._request)
+    if user is None:
+        return False
+    session = SessionAuthentication()
+    session.enforce_csrf(request)
+    _authenticated(request, session, user, None)
+    return True
 
 
-# Token first, as everywhere in the API (an anonymous caller gets 401 with WWW-Authenticate).
-ESTOP_AUTHENTICATION = [EstopTokenAuthentication, EstopSessionAuthentication]
+def _authenticated(request: Request, authenticator: Any, user: Any, auth: Any) -> None:
+    """What DRF's own authentication leaves on the request (``successful_authenticator`` says which)."""
+    request._authenticator = authenticator  # type: ignore[attr-defined]
+    request.user, request.auth = user, auth

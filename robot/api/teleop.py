@@ -15,7 +15,7 @@ from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, run
 from robot.api.common import error_responses
-from robot.api.estop_access import ESTOP_AUTHENTICATION
+from robot.api.estop_access import EstopAccessMixin
 from robot.commands.latch import alatch
 from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
 
@@ -49,8 +49,7 @@ class ReleaseInputSerializer(serializers.Serializer):
     confirm = serializers.BooleanField(help_text="Must be true: releasing lets the robot be driven again.")
 
 
-class EstopView(RobotAPIView):  # never throttled: a stop always goes through
-    authentication_classes = ESTOP_AUTHENTICATION  # works with the database down
+class EstopView(EstopAccessMixin, RobotAPIView):  # never throttled: a stop always goes through
 
     @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
     def get(self, request: Request) -> Response:
@@ -81,8 +80,7 @@ class EstopView(RobotAPIView):  # never throttled: a stop always goes through
         return Response(body, status=200 if report.ok else 502)
 
 
-class EstopReleaseView(RobotAPIView):
-    authentication_classes = ESTOP_AUTHENTICATION
+class EstopReleaseView(EstopAccessMixin, RobotAPIView):
 
     @extend_schema(
         request=ReleaseInputSerializer,
