@@ -14,3 +14,4 @@ class DashboardConfig(AppConfig):
 
         post_migrate.connect(lambda **kwargs: ensure_role_groups(), sender=self, weak=False)
         user_locked_out.connect(audit_lockout, dispatch_uid="dashboard.audit_lockout")
+        import dashboard.revocation  # noqa: F401  (its receivers: access changes reach open sockets)

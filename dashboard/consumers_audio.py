@@ -11,9 +11,10 @@ from channels.generic.websocket import AsyncWebsocketConsumer
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
+from dashboard.revocation import still_allowed
 from robot.audio.session import AudioSession
 from robot.audio.talk import TalkEvent
-from robot.live.groups import MIC_GROUP, TALK_GROUP
+from robot.live.groups import MIC_GROUP, TALK_GROUP, person_group
 
 
 class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
@@ -35,6 +36,7 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
             send_bytes=lambda data: self.send(bytes_data=data), mic_group=self._mic_group,
         )
         await self.channel_layer.group_add(TALK_GROUP, self.channel_name)
+        await self.channel_layer.group_add(person_group(user.pk), self.channel_name)
         await self.accept()
         await self.session.start()
 
@@ -49,6 +51,7 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
             return
         await self.session.close()
         await self.channel_layer.group_discard(TALK_GROUP, self.channel_name)
+        await self.channel_layer.group_discard(person_group(self.scope["user"].pk), self.channel_name)
 
     async def receive(self, text_data: str | None = None, bytes_data: bytes | None = None) -> None:
         assert self.session is not None
@@ -60,6 +63,16 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
         except ValueError:
             content = None
         await self.session.handle(content)
+
+    async def access_changed(self, event: dict[str, Any]) -> None:
+        """The person's access changed: stop listening and talking, and close, if they may no longer."""
+        if self.session is None:
+            return
+        code = await database_sync_to_async(still_allowed)(
+            self.scope, operator=self.session.allowed, session_key=event.get("session_key", ""))
+        if code is not None:
+            await self.session.close()  # listening and talking end, audited
+            await self.close(code=code)
 
     async def audio_mic(self, event: dict[str, Any]) -> None:
         if self.session is not None:

@@ -11,7 +11,8 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
-from robot.live.groups import LOCK_GROUP
+from dashboard.revocation import still_allowed
+from robot.live.groups import LOCK_GROUP, person_group
 from robot.teleop.driver import Driver
 from robot.teleop.driving import LockEvent
 
@@ -29,6 +30,7 @@ class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         can_drive = await database_sync_to_async(is_operator)(user)
         self.driver = Driver(user=user, owner=self.channel_name, can_drive=can_drive, send=self.send_json)
         await self.channel_layer.group_add(LOCK_GROUP, self.channel_name)
+        await self.channel_layer.group_add(person_group(user.pk), self.channel_name)
         await self.accept()
         await self.driver.start()
 
@@ -37,6 +39,7 @@ class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             return
         await self.driver.close()
         await self.channel_layer.group_discard(LOCK_GROUP, self.channel_name)
+        await self.channel_layer.group_discard(person_group(self.scope["user"].pk), self.channel_name)
 
     @classmethod
     async def decode_json(cls, text_data: str) -> Any:
@@ -48,6 +51,16 @@ class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
     async def receive_json(self, content: Any, **kwargs: Any) -> None:
         assert self.driver is not None
         await self.driver.handle(content)
+
+    async def access_changed(self, event: dict[str, Any]) -> None:
+        """The person's access changed: stop driving and close if they may no longer drive (or be here)."""
+        if self.driver is None:
+            return
+        code = await database_sync_to_async(still_allowed)(
+            self.scope, operator=self.driver.can_drive, session_key=event.get("session_key", ""))
+        if code is not None:
+            await self.driver.close()  # zero if it moved, the drive lock given back, audited
+            await self.close(code=code)
 
     async def teleop_lock(self, event: LockEvent) -> None:
         if self.driver is not None:

@@ -17,6 +17,11 @@ LOCK_GROUP = "teleop.lock"
 MIC_GROUP = "audio.mic"
 TALK_GROUP = "audio.talk"
 
+
+def person_group(user_id: object) -> str:
+    """Every drive and audio socket of one person (their access changed: dashboard.revocation)."""
+    return f"person.{user_id}"
+
 # Latest-state keys the server writes itself (no ROS topic behind them).
 STATUS_KEY = "_link"  # the link's connection status
 MODE_REQUEST_KEY = "mode_request"  # the last requested mode

@@ -17,6 +17,7 @@ const JITTER_S = 0.08; // start (and restart after an underrun) this far ahead: 
 const MAX_AHEAD_S = 0.4; // more queued than this means the clock drifted: drop and restart
 const TALK_KEY = "t";
 const UNAUTHENTICATED = 4401;
+const ACCESS_CHANGED = 4403; // the server closed it: this person may no longer listen or talk
 const TALK_FORMAT = { format: "S16LE", rate: 16000, channels: 1 };
 
 export function initAudio(root, config) {
@@ -57,7 +58,8 @@ export function initAudio(root, config) {
       if (ev.code === UNAUTHENTICATED) { toLogin(); return; }
       listening = talking = false;
       stopCapture();
-      setStatus("Audio connection lost: reconnecting…");
+      setStatus(ev.code === ACCESS_CHANGED ? "Your access has changed: listening and talking have ended."
+                                           : "Audio connection lost: reconnecting…");
       refresh();
       setTimeout(connect, 2000);
     };

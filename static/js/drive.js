@@ -15,6 +15,7 @@ const canDrive = card.dataset.canDrive === "true";
 const canTakeover = card.dataset.canTakeover === "true";
 const SEND_INTERVAL_MS = 50;
 const UNAUTHENTICATED = 4401;
+const ACCESS_CHANGED = 4403; // the server closed it: this person may no longer drive
 const $ = (id) => document.getElementById(id);
 const fmt = (v, digits = 2) => (Number.isFinite(v) ? v.toFixed(digits) : "—");
 
@@ -188,6 +189,7 @@ function openSocket() {
     renderLock();
     $("lock-state").textContent = "Drive connection lost — reconnecting…";
     if (ev.code === UNAUTHENTICATED) { toLogin(); return; }
+    if (ev.code === ACCESS_CHANGED) showError("Your access has changed: you may no longer drive the robot.");
     setTimeout(openSocket, wsDelay);
     wsDelay = Math.min(wsDelay * 2, 8000);
   };

@@ -1,0 +1,84 @@
+"""A person's access changed (a role taken away, the account deactivated or deleted, the password
+changed, a logout): their open drive and audio sockets hear it at once, in every web process
+(the channel layer), and close when they may no longer do what they were opened for. The page
+then connects again with whatever access the person has now, or goes to the login page.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from asgiref.sync import async_to_sync
+from channels.layers import get_channel_layer
+from django.contrib.auth import HASH_SESSION_KEY, get_user_model, user_logged_out
+from django.db import transaction
+from django.db.models.signals import m2m_changed, post_delete, post_save
+from django.dispatch import receiver
+
+from cyborg_site.roles import is_operator
+from robot.live.groups import person_group
+
+ACCESS_CHANGED = "access.changed"
+FORBIDDEN = 4403  # the socket's close code: the person may no longer do this (the page reconnects)
+LOGGED_OUT = 4401
+
+
+def _tell(user_id: object, *, session_key: str = "") -> None:
+    event = {"type": ACCESS_CHANGED, "session_key": session_key}
+    transaction.on_commit(lambda: async_to_sync(_send)(person_group(user_id), event))
+
+
+async def _send(group: str, event: dict[str, Any]) -> None:
+    layer = get_channel_layer()
+    if layer is not None:
+        await layer.group_send(group, event)
+
+
+@receiver(post_save, sender=get_user_model())
+def _saved(sender: type, instance: Any, created: bool, **kwargs: Any) -> None:
+    if not created:
+        _tell(instance.pk)
+
+
+@receiver(post_delete, sender=get_user_model())
+def _deleted(sender: type, instance: Any, **kwargs: Any) -> None:
+    _tell(instance.pk)
+
+
+@receiver(m2m_changed, sender=get_user_model().groups.through)
+def _groups_changed(sender: type, instance: Any, action: str, reverse: bool, pk_set: set[Any] | None,
+                    **kwargs: Any) -> None:
+    if action not in ("post_add", "post_remove", "post_clear"):
+        return
+    if not reverse:
+        _tell(instance.pk)
+    elif action == "post_clear":
+        for user_id in instance.user_set.values_list("pk", flat=True):
+            _tell(user_id)
+    else:
+        for user_id in pk_set or ():
+            _tell(user_id)
+
+
+@receiver(user_logged_out)
+def _logged_out(sender: type, request: Any, user: Any, **kwargs: Any) -> None:
+    if user is not None and request is not None and request.session.session_key:
+        _tell(user.pk, session_key=request.session.session_key)
+
+
+def still_allowed(scope: dict[str, Any], *, operator: bool, session_key: str) -> int | None:
+    """After an access change: the close code for this socket, or None if it may stay open.
+    ``session_key``: the logout's (empty for any other change)."""
+    session = scope.get("session")
+    own_key = getattr(session, "session_key", None) or ""
+    if session_key:
+        return LOGGED_OUT if session_key == own_key else None
+    user_id = getattr(scope.get("user"), "pk", None)
+    fresh = get_user_model().objects.filter(pk=user_id, is_active=True).first() if user_id is not None else None
+    if fresh is None:
+        return LOGGED_OUT
+    if session is not None and own_key and session.get(HASH_SESSION_KEY) not in (None, fresh.get_session_auth_hash()):
+        return LOGGED_OUT  # the password changed: this session is no longer valid
+    if operator and not is_operator(fresh):
+        return FORBIDDEN
+    return None
