@@ -134,12 +134,14 @@ AUTHENTICATION_BACKENDS = [
     "axes.backends.AxesStandaloneBackend",  # refuses locked-out accounts and addresses first
     "django.contrib.auth.backends.ModelBackend",
 ]
-# Login throttling (login form and API token): after LOGIN_FAILURE_LIMIT failures for one
-# account, or from one address, both are refused for LOGIN_LOCKOUT_MINUTES (admins can clear
-# it under Admin → Axes → Access attempts).
+# Login throttling (login form and API token): after LOGIN_FAILURE_LIMIT failures for one account
+# from one address, that account is refused from that address, and after as many from one address
+# (whatever the accounts), that address is refused, for LOGIN_LOCKOUT_MINUTES (admins can clear it
+# under Admin → Axes → Access attempts). Never an account from everywhere: anyone could then keep
+# the operators from logging in to press the E-STOP.
 AXES_FAILURE_LIMIT = env_int("LOGIN_FAILURE_LIMIT", 5, minimum=1)
 AXES_COOLOFF_TIME = timedelta(minutes=env_float("LOGIN_LOCKOUT_MINUTES", 15.0, minimum=0.1))
-AXES_LOCKOUT_PARAMETERS = ["username", "ip_address"]
+AXES_LOCKOUT_PARAMETERS = [["username", "ip_address"], "ip_address"]
 AXES_RESET_ON_SUCCESS = True
 AXES_LOCKOUT_CALLABLE = "dashboard.lockouts.lockout_response"
 AXES_CLIENT_IP_CALLABLE = "dashboard.lockouts.client_ip"

@@ -7,10 +7,13 @@ The tests run in order on one topology; each leaves every process running again.
 from __future__ import annotations
 
 import itertools
+import json
 import os
 import subprocess
 import threading
 import time
+import urllib.error
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -19,8 +22,8 @@ from playwright.sync_api import expect
 
 from robot import interface as ri
 from tests.browser.support import login
-from tests.deploy.topology import PrivatePostgres, Topology
-from tests.stack import PYTHON, ROOT
+from tests.deploy.topology import _TLS, PrivatePostgres, Topology
+from tests.stack import PASSWORD, PYTHON, ROOT
 from tests.support_processes import PrivateRedis
 
 pytestmark = [
@@ -277,3 +280,29 @@ def test_a_postgresql_restart_is_survived_without_restarting_any_process(topolog
     dashboard.reload()
     expect(dashboard.locator("#link-pill")).to_have_text("robot online")
     assert _pids(topology) == before
+
+
+def test_a_forged_forwarded_address_neither_escapes_a_lockout_nor_lands_in_it(topology):
+    """Through the shipped nginx, a client's own X-Forwarded-For is replaced by its real address:
+    rotating forged addresses still counts every failure against the one that sent them."""
+
+    def login(forged: str, password: str) -> int:
+        request = urllib.request.Request(
+            f"{topology.url}/api/auth/token/", method="POST",
+            data=json.dumps({"username": "otto", "password": password}).encode(),
+            headers={"Content-Type": "application/json", "Host": "localhost", "X-Forwarded-For": forged})
+        try:
+            with urllib.request.urlopen(request, timeout=5, context=_TLS) as res:
+                return res.status
+        except urllib.error.HTTPError as err:
+            return err.code
+
+    try:
+        failures = [login(f"10.9.0.{n}", "wrong") for n in range(5)]  # LOGIN_FAILURE_LIMIT
+        assert failures[:4] == [400] * 4 and failures[4] == 429, failures
+        assert login("10.9.1.1", PASSWORD) == 429  # a fresh forged address does not get in
+        rows = topology.manage("shell", "-c", "from axes.models import AccessAttempt\n"
+                               "print(sorted({a.ip_address for a in AccessAttempt.objects.all()}))")
+        assert rows.strip().splitlines()[-1] == "['127.0.0.1']", rows  # the real address, never a forged one
+    finally:
+        topology.manage("axes_reset")
