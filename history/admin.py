@@ -16,6 +16,7 @@ from django.utils.html import format_html
 
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
+from history.policy_audit import audit_default_interval, audit_policies, default_interval_now, policies_now
 from history.storage import samples_deleted
 from robot.link.bus import RobotError, acall_service
 
@@ -30,11 +31,24 @@ class RecordingSettingsAdmin(admin.ModelAdmin):
     def has_delete_permission(self, request: HttpRequest, obj: Any = None) -> bool:
         return False
 
+    def save_model(self, request: HttpRequest, obj: Any, form: Any, change: bool) -> None:
+        before = default_interval_now()
+        super().save_model(request, obj, form, change)
+        audit_default_interval(user=request.user, source="page", before=before, after=obj.default_interval_s)
+
+
+def _audited(request: HttpRequest, topics: list[str], change: Callable[[], Any]) -> Any:
+    before = policies_now(topics)
+    result = change()
+    audit_policies(user=request.user, source="page", before=before, after=policies_now(topics))
+    return result
+
 
 def _set_mode(mode: str) -> Callable[[Any, HttpRequest, QuerySet[TopicPolicy]], None]:
     @admin.action(description=f"Record selected topics: {Mode(mode).label}")
     def action(modeladmin: Any, request: HttpRequest, queryset: QuerySet[TopicPolicy]) -> None:
-        count = queryset.update(mode=mode)
+        topics = list(queryset.values_list("topic", flat=True))
+        count = _audited(request, topics, lambda: queryset.update(mode=mode))
         modeladmin.message_user(request, f"{count} topic(s) now recorded: {Mode(mode).label}.")
 
     action.__name__ = f"set_mode_{mode}"
@@ -60,6 +74,19 @@ class TopicPolicyAdmin(admin.ModelAdmin):
     def topic_and_type(self, policy: TopicPolicy) -> str:
         return format_html('{}<br><small class="policy-type">{}</small>', policy.topic, policy.msg_type)
 
+    def save_model(self, request: HttpRequest, obj: Any, form: Any, change: bool) -> None:
+        # (the list's inline edits come here too, one policy at a time)
+        topics = [obj.topic, *([form.initial["topic"]] if change and form.initial.get("topic") else [])]
+        _audited(request, list(dict.fromkeys(topics)), lambda: super(TopicPolicyAdmin, self).save_model(
+            request, obj, form, change))
+
+    def delete_model(self, request: HttpRequest, obj: Any) -> None:
+        _audited(request, [obj.topic], lambda: super(TopicPolicyAdmin, self).delete_model(request, obj))
+
+    def delete_queryset(self, request: HttpRequest, queryset: QuerySet[TopicPolicy]) -> None:
+        topics = list(queryset.values_list("topic", flat=True))
+        _audited(request, topics, lambda: super(TopicPolicyAdmin, self).delete_queryset(request, queryset))
+
     def get_urls(self) -> list[Any]:
         custom = [path("discover/", self.admin_site.admin_view(self.discover), name="history_topicpolicy_discover")]
         return custom + super().get_urls()
@@ -74,7 +101,7 @@ class TopicPolicyAdmin(admin.ModelAdmin):
             self.message_user(request, f"Could not ask the robot for its topics: {exc.message}", messages.ERROR)
             return redirect("admin:history_topicpolicy_changelist")
         pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
-        added = policies_add_discovered(topics=pairs)
+        added = _audited(request, [name for name, _ in pairs], lambda: policies_add_discovered(topics=pairs))
         self.message_user(request, f"The robot reports {len(pairs)} topics; added {len(added)} new (recording off).")
         return redirect("admin:history_topicpolicy_changelist")
 

@@ -25,6 +25,7 @@ from history.downsample import series
 from history.export import EXPORTERS, FORMATS
 from history.models import RecordingSettings, TopicPolicy
 from history.policies import default_interval_set, effective_interval, policies_add_discovered, policy_upsert
+from history.policy_audit import audit_default_interval, audit_policies, default_interval_now, policies_now
 from history.selectors import recorded_messages, recorded_topics, state_timeline
 from robot import interface as ri
 from robot.link.bus import acall_service
@@ -60,11 +61,15 @@ def topics_view(request: Request) -> Response:
     if request.method == "PATCH":
         body = s.PoliciesPatch(data=request.data)
         body.is_valid(raise_exception=True)
+        topics = [item["topic"] for item in body.validated_data.get("topics", [])]
         with transaction.atomic():
+            before, interval = policies_now(topics), default_interval_now()
             if "default_interval_s" in body.validated_data:
                 default_interval_set(seconds=body.validated_data["default_interval_s"])
             for item in body.validated_data.get("topics", []):
                 policy_upsert(**item)
+            audit_policies(user=request.user, source="api", before=before, after=policies_now(topics))
+            audit_default_interval(user=request.user, source="api", before=interval, after=default_interval_now())
     return Response(_policies())
 
 
@@ -77,7 +82,10 @@ def discover_view(request: Request) -> Response:
     body.is_valid(raise_exception=True)
     reply = async_to_sync(acall_service)("rosapi_topics") or {}
     pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
+    names = [name for name, _ in pairs]
+    before = policies_now(names)
     added = policies_add_discovered(topics=pairs, mode=body.validated_data["mode"])
+    audit_policies(user=request.user, source="api", before=before, after=policies_now(names))
     return Response({"discovered": len(pairs), "added": added})
 
 
