@@ -13,6 +13,7 @@ from daphne.http_protocol import HTTPFactory, WebRequest  # noqa: E402
 from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
 from cyborg_site import direct_frames, reaping  # noqa: E402
+from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
@@ -23,8 +24,8 @@ from robot.link.hosting import autostart_in_daphne  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
-        "http": CountRequests(FastCommandApp(FastStateApp(django_asgi_app), django_asgi_app)),
-        "websocket": OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns))),
+        "http": ClientAddress(CountRequests(FastCommandApp(FastStateApp(django_asgi_app), django_asgi_app))),
+        "websocket": ClientAddress(OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns)))),
     }
 )
 

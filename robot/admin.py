@@ -10,7 +10,7 @@ from robot.models import AuditEntry, DomeMode, EmotionPreset, Location, SoundCli
 
 @admin.register(AuditEntry)
 class AuditEntryAdmin(admin.ModelAdmin):
-    list_display = ("created", "username", "source", "action", "ok", "outcome")
+    list_display = ("created", "username", "address", "source", "action", "ok", "outcome")
     list_filter = ("ok", "source", "action")
     search_fields = ("username", "action", "outcome")
     date_hierarchy = "created"

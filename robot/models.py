@@ -24,6 +24,7 @@ class AuditEntry(models.Model):
     ok = models.BooleanField(default=False)
     outcome = models.TextField(blank=True)
     error_code = models.CharField(max_length=32, blank=True)
+    address = models.CharField(max_length=45, blank=True, help_text="The client's address, as the server saw it.")
 
     class Meta:
         ordering = ["-created", "-id"]

@@ -20,7 +20,8 @@ class AuditEntryOut(serializers.ModelSerializer):
 
     class Meta:
         model = AuditEntry
-        fields = ["id", "created", "username", "source", "action", "params", "ok", "outcome", "error_code"]
+        fields = ["id", "created", "username", "address", "source", "action", "params", "ok", "outcome",
+                  "error_code"]
 
 
 class AuditPagination(PageNumberPagination):

@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+from contextvars import ContextVar
 from typing import Any
 
 from cyborg_site.text import scrub, scrub_json
 from robot.models import AuditEntry
 
+# The client of the request or socket being served (set for each connection: cyborg_site.client_address).
+client_address: ContextVar[str] = ContextVar("client_address", default="")
+
 
 def audit_record(
-    *, user: Any, source: str, action: str, params: dict[str, Any], ok: bool, outcome: str = "", error_code: str = ""
+    *, user: Any, source: str, action: str, params: dict[str, Any], ok: bool, outcome: str = "", error_code: str = "",
+    address: str | None = None,
 ) -> AuditEntry:
+    """``address``: the client's, when written away from its request (the audit writer's thread)."""
     authenticated = user is not None and getattr(user, "is_authenticated", False)
     return AuditEntry.objects.create(
         user_id=user.pk if authenticated else None,  # (an E-STOP pass user is not a model instance)
@@ -22,4 +28,5 @@ def audit_record(
         ok=ok,
         outcome=scrub(outcome[:2000]),
         error_code=error_code,
+        address=client_address.get() if address is None else address,
     )

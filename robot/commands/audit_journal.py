@@ -24,6 +24,7 @@ from django.conf import settings
 from django.db import transaction
 
 from cyborg_site.text import scrub, scrub_json
+from robot.commands.audit import client_address
 from robot.models import AuditEntry
 
 log = logging.getLogger(__name__)
@@ -55,6 +56,7 @@ def keep(fields: dict[str, Any]) -> None:
         "at": time.time(), "user_id": getattr(user, "pk", None) if authenticated else None,
         "username": getattr(user, "username", "") if authenticated else "",
         **{k: fields.get(k) for k in ("source", "action", "params", "ok", "outcome", "error_code")},
+        "address": fields.get("address") or client_address.get(),
     }
     _folder().mkdir(parents=True, exist_ok=True)
     while True:
@@ -115,6 +117,7 @@ def _write(entries: list[dict[str, Any]]) -> None:
                 user_id=entry["user_id"] if entry.get("user_id") in known else None, username=entry["username"],
                 source=entry["source"] or "system", action=entry["action"] or "",
                 params=scrub_json(entry["params"] or {}), ok=bool(entry["ok"]),
-                outcome=scrub(str(entry["outcome"] or "")[:2000]), error_code=entry["error_code"] or "")
+                outcome=scrub(str(entry["outcome"] or "")[:2000]), error_code=entry["error_code"] or "",
+                address=str(entry.get("address") or ""))
             # The row says when it happened, not when the database came back.
             AuditEntry.objects.filter(pk=row.pk).update(created=datetime.fromtimestamp(entry["at"], tz=UTC))

@@ -30,6 +30,7 @@ from typing import Any
 from asgiref.sync import async_to_sync, sync_to_async
 
 from cyborg_site.roles import is_operator, roles_cached
+from robot.commands.audit import client_address
 from robot.commands.audit_writer import writer
 from robot.commands.gate import Declaration, declaration
 from robot.commands.latch import ensure_released
@@ -111,7 +112,8 @@ async def _send(command: Command, checked: Any) -> str:
 
 
 def _audit_fields(command: Command, user: Any, source: str) -> dict[str, Any]:
-    return {"user": user, "source": source, "action": command.action, "params": command.params}
+    return {"user": user, "source": source, "action": command.action, "params": command.params,
+            "address": client_address.get()}
 
 
 def _prepare(command: Command, audit: dict[str, Any]) -> Any:

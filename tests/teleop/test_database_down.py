@@ -93,15 +93,16 @@ def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_i
 
     def audited() -> bool:
         status, body = page.get("/api/audit/?limit=20")
-        rows[:] = [(r["username"], r["action"], r["ok"], r["error_code"]) for r in reversed(body.get("results", []))]
+        rows[:] = [(r["username"], r["action"], r["ok"], r["error_code"], r["address"])
+                   for r in reversed(body.get("results", []))]
         return status == 200 and len(rows) == 7
 
     wait_until(audited, timeout=20, what="the journaled audit entries")
-    assert rows == [
+    assert rows == [(*row, "127.0.0.1") for row in (  # every row with the client's address
         ("olga", "speech", True, ""), ("otto", "estop", True, ""), ("olga", "speech", False, "unavailable"),
         ("olga", "motors", False, "unavailable"), ("olga", "mode", False, "unavailable"),
         ("olga", "estop.release", True, ""), ("olga", "estop", True, ""),
-    ]
+    )]
     wait_until(lambda: script.post("/api/robot/estop/release/", {"confirm": True})[0] == 200, timeout=10,
                what="commands accepted again")
     assert script.post("/api/robot/speech/", {"text": "after"})[0] == 200

@@ -199,3 +199,18 @@ async def test_it_tells_every_page_when_an_idle_drivers_lock_times_out(link, sim
     assert await AuditEntry.objects.filter(action="teleop.unlock", params__reason="timeout").aexists()
     await otto_ws.disconnect()
     await vera_ws.disconnect()
+
+
+async def test_its_audit_entries_carry_the_clients_address(link, sim, operator):
+    ws = ws_communicator(operator, "/ws/teleop/")
+    ws.scope["client"] = ("10.1.2.3", 50123)  # what Daphne takes from the proxy
+    assert (await ws.connect())[0]
+    await ws.receive_json_from(timeout=5)
+    await ws.send_json_to({"type": "acquire"})
+    for _ in range(250):
+        if await AuditEntry.objects.filter(action="teleop.lock").aexists():
+            break
+        await asyncio.sleep(0.02)
+    entry = await AuditEntry.objects.aget(action="teleop.lock")
+    assert (entry.username, entry.address) == ("otto", "10.1.2.3")
+    await ws.disconnect()
