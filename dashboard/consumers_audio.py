@@ -11,7 +11,7 @@ from channels.generic.websocket import AsyncWebsocketConsumer
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
-from dashboard.revocation import still_allowed
+from dashboard.revocation import close_if_revoked
 from robot.audio.session import AudioSession
 from robot.audio.talk import TalkEvent
 from robot.live.groups import MIC_GROUP, TALK_GROUP, person_group
@@ -66,13 +66,8 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
 
     async def access_changed(self, event: dict[str, Any]) -> None:
         """The person's access changed: stop listening and talking, and close, if they may no longer."""
-        if self.session is None:
-            return
-        code = await database_sync_to_async(still_allowed)(
-            self.scope, operator=self.session.allowed, session_key=event.get("session_key", ""))
-        if code is not None:
-            await self.session.close()  # listening and talking end, audited
-            await self.close(code=code)
+        if self.session is not None:  # (its close: listening and talking end, audited)
+            await close_if_revoked(self, event, operator=self.session.allowed, end=self.session.close)
 
     async def audio_mic(self, event: dict[str, Any]) -> None:
         if self.session is not None:

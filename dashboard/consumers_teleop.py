@@ -11,7 +11,7 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
-from dashboard.revocation import still_allowed
+from dashboard.revocation import close_if_revoked
 from robot.live.groups import LOCK_GROUP, person_group
 from robot.teleop.driver import Driver
 from robot.teleop.driving import LockEvent
@@ -54,13 +54,8 @@ class TeleopConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
 
     async def access_changed(self, event: dict[str, Any]) -> None:
         """The person's access changed: stop driving and close if they may no longer drive (or be here)."""
-        if self.driver is None:
-            return
-        code = await database_sync_to_async(still_allowed)(
-            self.scope, operator=self.driver.can_drive, session_key=event.get("session_key", ""))
-        if code is not None:
-            await self.driver.close()  # zero if it moved, the drive lock given back, audited
-            await self.close(code=code)
+        if self.driver is not None:  # (its close: zero if it moved, the drive lock given back, audited)
+            await close_if_revoked(self, event, operator=self.driver.can_drive, end=self.driver.close)
 
     async def teleop_lock(self, event: LockEvent) -> None:
         if self.driver is not None:

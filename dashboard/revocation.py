@@ -6,9 +6,11 @@ then connects again with whatever access the person has now, or goes to the logi
 
 from __future__ import annotations
 
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from asgiref.sync import async_to_sync
+from channels.db import database_sync_to_async
 from channels.layers import get_channel_layer
 from django.contrib.auth import HASH_SESSION_KEY, get_user_model, user_logged_out
 from django.db import transaction
@@ -82,3 +84,14 @@ def still_allowed(scope: dict[str, Any], *, operator: bool, session_key: str) ->
     if operator and not is_operator(fresh):
         return FORBIDDEN
     return None
+
+
+async def close_if_revoked(consumer: Any, event: dict[str, Any], *, operator: bool,
+                           end: Callable[[], Awaitable[Any]]) -> None:
+    """A socket's answer to an access change: ``end`` what it does (driving, listening, talking) and
+    close, if the person may no longer be here or do that."""
+    code = await database_sync_to_async(still_allowed)(consumer.scope, operator=operator,
+                                                       session_key=event.get("session_key", ""))
+    if code is not None:
+        await end()
+        await consumer.close(code=code)

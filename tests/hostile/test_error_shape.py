@@ -27,6 +27,16 @@ def test_it_refuses_deeply_nested_json_with_a_400(operator_api):
     assert "nested too deeply" in body["detail"] and body["field"].startswith("text.0.0")
 
 
+@pytest.mark.parametrize("path, field", [("/api/robot/speech/", "text"), ("/api/robot/motors/", "enabled"),
+                                         ("/api/robot/event/", "event"), ("/api/robot/mode/", "mode"),
+                                         ("/api/robot/estop/release/", "confirm"), ("/api/navigation/goal/", "x")])
+def test_it_refuses_a_number_too_large_to_be_finite_with_a_400(operator_api, viewer_api, path, field):
+    """1e400 parses as infinity: it once gave 500, for viewers too, and its audit row failed."""
+    for api in (operator_api, viewer_api):
+        res = api.post(path, '{"' + field + '": 1e400}', content_type="application/json")
+        assert "finite" in assert_error(res, 400, "invalid", field)["detail"]
+
+
 def test_it_refuses_a_body_too_large_with_a_400(operator_api, settings):
     settings.DATA_UPLOAD_MAX_MEMORY_SIZE = 1000
     res = operator_api.post("/api/robot/speech/", '{"text": "' + "a" * 2000 + '"}', content_type="application/json")
