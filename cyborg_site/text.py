@@ -8,6 +8,7 @@ is made safe to encode (U+FFFD for a lone surrogate), so no reader ever fails on
 
 from __future__ import annotations
 
+import math
 import re
 import unicodedata
 from typing import Any
@@ -68,9 +69,12 @@ def scrub(text: str) -> str:
 
 
 def scrub_json(value: Any) -> Any:
-    """A JSON-like value with every string (keys too) scrubbed; other values unchanged."""
+    """A JSON-like value with every string (keys too) scrubbed, and every number that is not finite
+    (``1e400`` parses as infinity) as its text, which a JSON column can store; other values unchanged."""
     if isinstance(value, str):
         return scrub(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
     if isinstance(value, dict):
         return {scrub_json(k): scrub_json(v) for k, v in value.items()}
     if isinstance(value, list | tuple):

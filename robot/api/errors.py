@@ -8,7 +8,6 @@ which call ``api_error`` for /api/ paths. Redis or the database being down is a 
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from django.conf import settings
@@ -132,13 +131,10 @@ def _validation_body(detail: Any) -> dict[str, Any]:
 
 def body_problem(data: Any) -> tuple[str, str] | None:
     """(field path, reason) for the first thing in a parsed JSON body the API never accepts:
-    nesting deeper than ``MAX_JSON_DEPTH``, text (keys too) against the text policy, or a number
-    too large to be finite (``1e400`` parses as infinity)."""
+    nesting deeper than ``MAX_JSON_DEPTH``, or text (keys too) against the text policy."""
     stack: list[tuple[Any, str, int]] = [(data, "", 1)]
     while stack:
         item, path, level = stack.pop()
-        if isinstance(item, float) and not math.isfinite(item):
-            return path or "body", "must be a finite number."
         if isinstance(item, str):
             reason = character_problem(item)
             if reason:
