@@ -177,13 +177,21 @@ EMBEDDED = not REDIS_URL  # one process hosts the web server, the robot link and
 # Debugging aid: stage timestamps of the live probe key, one JSON line per update (robot.live.trace).
 LIVE_TRACE_FILE = env_str("LIVE_TRACE_FILE")
 if REDIS_URL:
+    from redis.asyncio.retry import Retry
+    from redis.backoff import NoBackoff
+    from redis.exceptions import ConnectionError as RedisConnectionError
+
     CHANNEL_LAYERS: dict[str, dict[str, Any]] = {
         "default": {
             "BACKEND": "channels_redis.core.RedisChannelLayer",
             "CONFIG": {
                 # redis-py 8 times socket reads out after 5 s by default, exactly the layer's blocking
                 # receive (BZPOPMIN, 5 s): a quiet channel then raised TimeoutError out of receive().
-                "hosts": [{"address": REDIS_URL, "socket_timeout": 15, "socket_connect_timeout": 2}],
+                # After a Redis restart its pooled connections are dead: pinged when idle, and a command
+                # that meets one tries again on a fresh one (as robot.live.redis_clients does).
+                "hosts": [{"address": REDIS_URL, "socket_timeout": 15, "socket_connect_timeout": 2,
+                           "health_check_interval": 2,
+                           "retry": Retry(NoBackoff(), 1, supported_errors=(RedisConnectionError,))}],
                 "prefix": env_str("CHANNEL_LAYER_PREFIX", "cyborg"),
                 "capacity": 200,
                 "expiry": 10,
