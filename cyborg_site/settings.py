@@ -226,6 +226,9 @@ ROBOT_LINK_MAX_BACKOFF_S = env_float("ROBOT_LINK_MAX_BACKOFF_S", 2.0, minimum=0.
 # at most this long after the holder dies. ROBOT_LINK_NAME names this process in the lease and health.
 ROBOT_LINK_LEASE_S = env_float("ROBOT_LINK_LEASE_S", 2.0, minimum=0.5)
 ROBOT_LINK_NAME = env_str("ROBOT_LINK_NAME", "")
+# Scaled mode: the links' second path for the E-STOP, beside Redis (robot.link.direct): one host:port
+# per link process, the same list for every process; each link listens on the first one free.
+ROBOT_LINK_DIRECT_ADDRESSES = env_list("ROBOT_LINK_DIRECT_ADDRESSES", [])
 # A robotlink told to stop (SIGTERM) exits within this, its threads' stacks in its log if it had to cut its
 # stop short: inside the supervisor's kill timeout (scripts/stack.sh 10 s, systemd TimeoutStopSec 15 s).
 ROBOT_LINK_STOP_DEADLINE_S = env_float("ROBOT_LINK_STOP_DEADLINE_S", 8.0, minimum=0.01)

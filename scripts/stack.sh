@@ -25,6 +25,7 @@ HTTP_PORT=${STACK_HTTP_PORT:-8480}
 read -r WEB_A WEB_B <<<"${STACK_WEB_PORTS:-8401 8402}"
 SIM_PORT=${STACK_SIM_PORT:-9490}
 VIDEO_PORT=${STACK_VIDEO_PORT:-8490}
+LINK_PORTS=${STACK_LINK_PORTS:-127.0.0.1:8491,127.0.0.1:8492}
 PIDS=$STACK_DIR/pids
 LOGS=$STACK_DIR/logs
 ENV_FILE=$STACK_DIR/cyborg.env
@@ -45,7 +46,7 @@ write_env() {
   local key
   key=$("$BIN/python" -c "import secrets; print(secrets.token_urlsafe(50))")
   {
-    grep -v -E '^(SECRET_KEY|ALLOWED_HOSTS|CSRF_TRUSTED_ORIGINS|VAR_DIR|DATABASE_URL|REDIS_URL|CHANNEL_LAYER_PREFIX|ROSBRIDGE_URL|VIDEO_URL|SECURE_HSTS_SECONDS)=' \
+    grep -v -E '^(SECRET_KEY|ALLOWED_HOSTS|CSRF_TRUSTED_ORIGINS|VAR_DIR|DATABASE_URL|REDIS_URL|CHANNEL_LAYER_PREFIX|ROSBRIDGE_URL|VIDEO_URL|ROBOT_LINK_DIRECT_ADDRESSES|SECURE_HSTS_SECONDS)=' \
       deploy/cyborg.env.example
     echo "SECRET_KEY=$key"
     echo "ALLOWED_HOSTS=localhost,127.0.0.1"
@@ -58,6 +59,7 @@ write_env() {
     echo "CHANNEL_LAYER_PREFIX=${CHANNEL_LAYER_PREFIX:-cyborg-stack}"
     echo "ROSBRIDGE_URL=${ROSBRIDGE_URL:-ws://127.0.0.1:$SIM_PORT}"
     echo "VIDEO_URL=${VIDEO_URL:-http://127.0.0.1:$VIDEO_PORT}"
+    echo "ROBOT_LINK_DIRECT_ADDRESSES=$LINK_PORTS"
     echo "CYBORG_STACK=$STACK_DIR"  # marks our processes (checked before any is signalled)
     if [[ -n "${STACK_ENV:-}" ]]; then printf "%s\n" "$STACK_ENV"; fi
   } >"$ENV_FILE"

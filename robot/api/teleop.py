@@ -72,9 +72,7 @@ class EstopView(EstopAccessMixin, RobotAPIView):  # never throttled: a stop alwa
         except EstopIncomplete:
             pass  # every step was tried: the report says which failed
         report = estop_outcome(command)
-        # Read again (a second hop) only if the store could not be read after the stop.
-        latch = command.result["latch"] if "latch" in command.result else async_to_sync(alatch)()
-        body = {**report.as_dict(), "latch": latch.as_msg()}
+        body = {**report.as_dict(), "latch": command.result["latch"].as_msg()}
         if not report.ok:
             body.update(detail="Emergency stop incomplete: " + report.summary(), code="partial")
         return Response(body, status=200 if report.ok else 502)

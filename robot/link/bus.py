@@ -22,7 +22,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.link import connection as link_module
-from robot.link import redisqueue
+from robot.link import direct, redisqueue
 from robot.link.connection import RobotLink
 from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, STATUS_KEY, LinkReply, LinkRequest
 from robot.live.state import get_store, redis_key, status_view
@@ -98,6 +98,21 @@ def stopping() -> Iterator[None]:
         _stopping.reset(token)
 
 
+_emergency: ContextVar[bool] = ContextVar("emergency", default=False)
+
+
+@contextmanager
+def emergency() -> Iterator[None]:
+    """The E-STOP's own requests: they pass the latch (``stopping``), reach a link that can no
+    longer prove its lease because Redis is out of reach, and go by the direct path first."""
+    token = _emergency.set(True)
+    try:
+        with stopping():
+            yield
+    finally:
+        _emergency.reset(token)
+
+
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
     request = cast(LinkRequest, {
         "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
@@ -106,6 +121,8 @@ def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest
     })
     if _stopping.get():
         request["stopping"] = True
+    if _emergency.get():
+        request["emergency"] = True
     return request
 
 
@@ -128,12 +145,9 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
         # turn later (a command would wait for it before anything is sent).
         async with asyncio.timeout(timeout):
             if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
-                reply = await _direct(hosted, request)
+                reply = await _in_process(hosted, request)
             else:
-                # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
-                if op not in ("reconnect", "subscribe", "topics_watch") and not await _is_online():
-                    raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
-                reply = await _via_layer(request)
+                reply = await _to_link_process(request, timeout)
     except TimeoutError:
         raise RobotTimeout(f"Command path down? The robot link did not answer in {timeout:g} s") from None
     if not reply.get("ok"):
@@ -141,7 +155,19 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
     return reply
 
 
-async def _direct(hosted: RobotLink, request: LinkRequest) -> LinkReply:
+async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
+    if request.get("emergency") and direct.enabled():
+        try:
+            return await direct.ask(request, timeout)
+        except direct.Unreachable:
+            pass  # no link listens there (an older one, or none yet): the usual way
+    # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
+    if request["op"] not in ("reconnect", "subscribe", "topics_watch") and not await _is_online():
+        raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+    return await _via_layer(request)
+
+
+async def _in_process(hosted: RobotLink, request: LinkRequest) -> LinkReply:
     """The link lives in this process (embedded default): no channel-layer hop."""
     if asyncio.get_running_loop() is hosted.loop:
         return await hosted.execute(request)

@@ -37,6 +37,7 @@ from robot.live.groups import (
     LinkStatus,
     TopicUpdate,
 )
+from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S, StateStore
 from robot.supervisor import end_if_cancelled, failing, supervise
 
@@ -155,6 +156,9 @@ class RobotLink:
         self.command_path = True  # until a ping over the request channel goes unanswered
         self.connecting_until = 0.0  # epoch time: until then, a link not yet connected is still connecting
         self._latch_msg: dict[str, Any] = {}
+        # The last E-STOP this link took (epoch, who): written to the shared store if the store missed it.
+        self._pressed_at = 0.0
+        self._pressed_by = ""
         self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
     # --- lifecycle -------------------------------------------------------------------
@@ -407,7 +411,12 @@ class RobotLink:
             # the store then would undo it, or write back a latch without who and when.
             if not self.guard.settled(LATCH_SETTLE_S):
                 return
-            if entry is not None:
+            stored = Latch.from_msg(self._latch_msg if entry is not None else None)
+            if self.guard.latched and self._pressed_at > max(stored.at, stored.released_at) and not stored.latched:
+                log.warning("the shared store missed an E-STOP this link took: writing it")
+                pressed = Latch(latched=True, by=self._pressed_by, at=self._pressed_at)
+                await aannounce(LATCH_KEY, dict(server_update(LATCH_KEY, pressed.as_msg())), store=self.store)
+            elif entry is not None:
                 self.guard.sync(bool(self._latch_msg.get("latched")))
             elif self.guard.latched:
                 log.warning("the shared store lost the E-STOP latch: writing it back")
@@ -480,17 +489,23 @@ class RobotLink:
                 continue  # a stale stop message from an earlier link
             self._spawn(self._handle(cast(LinkRequest, request)))
 
-    async def _handle(self, request: LinkRequest) -> None:
+    async def answer(self, request: LinkRequest) -> LinkReply | None:
+        """``execute`` for a request that came from another process; None if it came too late."""
         deadline = request.get("deadline", float("inf"))
         if deadline < time.time():
             log.warning("dropped a %s request that arrived after its deadline", request.get("op"))
-            return
+            return None
         # A link just started (a standby taking over) serves requests queued meanwhile once connected,
         # or still says "offline" in time for the caller to hear it.
         while (not self.connected and request.get("op") not in _NO_ROBOT_NEEDED
                and time.time() < min(deadline - REPLY_MARGIN_S, self.connecting_until)):
             await asyncio.sleep(0.02)
-        reply = await self.execute(request)
+        return await self.execute(request)
+
+    async def _handle(self, request: LinkRequest) -> None:
+        reply = await self.answer(request)
+        if reply is None:
+            return
         reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
         reply_to = request.get("reply_to") or ""
         if reply_to.startswith(REPLY_LIST_PREFIX):
@@ -521,9 +536,11 @@ class RobotLink:
             return {"ok": True}
         if op == "estop" and self.guard is not None:
             self.guard.engage()  # latched even when the robot is offline
+            self._pressed_at = max(self._pressed_at, float(request.get("at") or time.time()))
+            self._pressed_by = str(request.get("by") or self._pressed_by)
         if not self.connected or self.ros is None or not self.ros.is_connected:
             return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
-        if self.lease is not None and not await self.lease.check():
+        if self.lease is not None and not await self._fenced_ok(request):
             # The fencing check: another link may hold the lease now; never command the robot twice.
             return {"ok": False, "error_code": "offline",
                     "error": "This robot link lost its lease; the other one takes over"}
@@ -539,6 +556,14 @@ class RobotLink:
             return await self._call_service(request)
         return {"ok": False, "error_code": "invalid", "error": f"Unknown link operation {op!r}"}
 
+    async def _fenced_ok(self, request: LinkRequest) -> bool:
+        """The lease still ours: proved by its token in Redis, or, for what only stops the robot, not
+        known to be lost (Redis out of reach: nobody else can hold it then)."""
+        assert self.lease is not None
+        if request.get("op") == "estop" or request.get("emergency"):
+            return self.lease.held or self.lease.may_stop
+        return await self.lease.check()
+
     def _held_back(self, request: LinkRequest, name: str, msg: dict[str, Any]) -> LinkReply | None:
         """The last check before the robot: the latch, on every publish and service call."""
         if self.guard is None:
@@ -549,7 +574,7 @@ class RobotLink:
     def _publish_zero(self) -> None:
         if self.ros is None or not self.ros.is_connected:
             raise RuntimeError("robot offline")
-        if self.lease is not None and not self.lease.held:
+        if self.lease is not None and not self.lease.may_stop:
             raise RuntimeError("this robot link no longer holds the lease")
         cmd_vel = ri.topic("cmd_vel")
         self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ZERO_TWIST))

@@ -18,7 +18,7 @@ from django.conf import settings
 from cyborg_site.drain import daphne_reactor
 from robot.bounded import cancel_within, within
 from robot.link import connection as link_module
-from robot.link import redisqueue
+from robot.link import direct, redisqueue
 from robot.link.bus import aping_over_layer
 from robot.link.connection import RobotLink
 from robot.link.lease import Lease
@@ -62,6 +62,8 @@ async def start_link(
         raise
     link_module.current = link
     tasks = [supervise("link.command-path", functools.partial(probe_command_path, link))]
+    if not embedded and direct.enabled():
+        tasks.append(supervise("link.direct", functools.partial(direct.serve, link.answer)))
     tasks += [
         supervise(f"background.{name}", functools.partial(service, link))
         for name, service, embedded_only in _background

@@ -5,6 +5,10 @@ well inside that time, its token compared with the one in Redis before every pub
 fencing check). A holder that cannot renew before the lease runs out, or finds another token,
 has lost it and stops at once; a holder that dies stops renewing, and a standby takes the key
 when it expires. The token names the holder, so anyone can see which process is active.
+
+While Redis cannot be reached at all, nobody can take the lease, so the holder keeps its robot
+connection but only to stop the robot (``may_stop``): the E-STOP does not depend on Redis. It
+takes its key back when Redis returns, or stops if another link was quicker.
 """
 
 from __future__ import annotations
@@ -42,6 +46,11 @@ class Lease:
     def held(self) -> bool:
         return time.monotonic() < self._valid_until and not self.lost.is_set()
 
+    @property
+    def may_stop(self) -> bool:
+        """Held, or held until Redis went out of reach: the robot may be stopped from here."""
+        return self.held or (self._redis_down and self.acquired_at is not None and not self.lost.is_set())
+
     async def acquire(self) -> None:
         """Wait (as the standby) until this process holds the lease."""
         while True:
@@ -71,7 +80,7 @@ class Lease:
 
     async def hold(self) -> None:
         """Renew the lease until it is lost; returns then (``lost`` is set)."""
-        while self.held:
+        while not self.lost.is_set():
             await asyncio.sleep(self.renew_s)
             end_if_cancelled()
             started = time.monotonic()
@@ -88,7 +97,28 @@ class Lease:
                     raise asyncio.CancelledError from exc
                 self._redis_failed()
                 if time.monotonic() >= self._valid_until:
-                    self._lose(f"could not renew it within {self.ttl_s:g} s")
+                    await self._await_redis()
+
+    async def _await_redis(self) -> None:
+        """Past the lease with Redis out of reach: stop-only until Redis answers, then take the key
+        back (the standby waits a lease's time after an outage before it tries) or give up."""
+        log.error("robot link %s cannot renew its lease while Redis is unreachable: it only stops the robot "
+                  "until Redis returns", self.holder)
+        while True:
+            await asyncio.sleep(self.poll_s)
+            end_if_cancelled()
+            started = time.monotonic()
+            try:
+                if await self.lock.owned() or await self.lock.do_acquire(self.token):
+                    self._held_from(started)
+                    self._redis_ok()
+                    log.warning("robot link %s holds its lease again", self.holder)
+                    return
+            except RedisError:
+                continue
+            self._redis_ok()
+            self._lose("another link took it while Redis was unreachable")
+            return
 
     async def check(self) -> bool:
         """Before every publish: the lease is still ours, by the token stored in Redis."""

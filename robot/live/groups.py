@@ -93,7 +93,10 @@ class LinkRequest(TypedDict, total=False):
     service_type: str
     args: dict[str, Any]
     timeout: float
-    stopping: bool  # one of the E-STOP's own steps: may pass the latch (interface.passes_latch)
+    stopping: bool  # stops the robot or does not move it: may pass the latch (interface.passes_latch)
+    emergency: bool  # one of the E-STOP's own steps: the direct path, and a link that cannot prove its lease
+    by: str  # estop: who pressed it
+    at: float  # estop: when (epoch seconds)
     listener: str  # audio: which listener's lease
     on: bool
     holder: str  # topics_watch: which web process's leases

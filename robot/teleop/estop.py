@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
@@ -15,7 +16,7 @@ from robot.audio.talk import end_all_talk
 from robot.commands.latch import Latch, aengage, alatch, arecord_steps, arelease
 from robot.commands.modes import perform_stop
 from robot.commands.pipeline import Command, InvalidCommand, arun
-from robot.link.bus import RobotError, acall_service, arequest, stopping
+from robot.link.bus import RobotError, acall_service, arequest, emergency
 from robot.navigation.goals import apublish_action, cancel_message
 from robot.teleop.driving import announce
 from robot.teleop.lock import get_lock
@@ -24,6 +25,8 @@ log = logging.getLogger(__name__)
 
 STEP_TIMEOUT_S = 3.0
 ATTEMPT_TIMEOUT_S = STEP_TIMEOUT_S + 2  # a step that outlives its own time-outs is given up on
+ANSWER_S = 0.9  # the answer says what was done by then; a step still running goes on
+RECORD_S = 0.2  # and keeping the steps with the latch may take this much more
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,7 @@ class EstopIncomplete(RobotError):
 
 async def _zero_velocity(by: str) -> str:
     # The link publishes zero now and for a short hold, and refuses motion until released.
-    await arequest("estop", timeout=STEP_TIMEOUT_S)
+    await arequest("estop", timeout=STEP_TIMEOUT_S, by=by, at=time.time())
     return "zero Twist sent and held"
 
 
@@ -111,25 +114,51 @@ async def _attempt(name: str, step: Step, by: str) -> StepResult:
         return StepResult(name, False, f"{type(exc).__name__}: {exc}")
 
 
-async def estop_steps(*, by: str = "") -> EstopReport:
-    """Latch, then every step: the zero Twist first (fastest), then the rest side by side."""
-    with stopping():  # the steps' requests pass the link's latch, where they stop the robot
-        zero = asyncio.ensure_future(_attempt(*STEPS[0], by))
-        latched = await _attempt("latch", _latch, by)
-        head = await zero
-        tail = await asyncio.gather(*(_attempt(name, step, by) for name, step in STEPS[1:]))
-    report = EstopReport((latched, head, *tail))
-    if latched.ok:
+def _late(task: asyncio.Task) -> None:
+    if not task.cancelled():
+        result: StepResult = task.result()
+        log.warning("e-stop step %s finished after the answer: %s (%s)", result.step,
+                    "ok" if result.ok else "FAILED", result.detail)
+
+
+async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
+    """Every step side by side, the zero Twist first (it also latches the link); the report within
+    ``ANSWER_S``, a step still running then reported as such (it goes on, and logs its end). With
+    the report, the latch as it now stands: from the shared store, or, if that could not be
+    written, as the link holds it."""
+    started = time.monotonic()
+    pressed = time.time()
+    engaged: list[Latch] = []
+
+    async def latch(by: str) -> str:
+        engaged.append(await aengage(by=by))
+        return engaged[0].message
+
+    with emergency():  # the steps' requests pass the link's latch, by the direct path where there is one
+        tasks = [asyncio.ensure_future(_attempt(name, step, by))
+                 for name, step in (STEPS[0], ("latch", latch), *STEPS[1:])]
+    done, _ = await asyncio.wait(tasks, timeout=ANSWER_S)
+    results = []
+    for task, (name, _) in zip(tasks, (STEPS[0], ("latch", latch), *STEPS[1:]), strict=True):
+        if task in done:
+            results.append(task.result())
+        else:
+            task.add_done_callback(_late)
+            results.append(StepResult(name, False, f"no answer within {ANSWER_S:g} s (still trying)"))
+    zero, stored = results[0], results[1]
+    if not stored.ok and zero.ok:
+        results[1] = StepResult("latch", False, f"not in the shared store ({stored.detail}); the robot link holds "
+                                "it and writes it there when the store answers again")
+    report = EstopReport((results[1], zero, *results[2:]))
+    steps = report.as_dict()["steps"]
+    if engaged:
         try:
-            await arecord_steps(await alatch(), report.as_dict()["steps"])
+            left = max(0.05, ANSWER_S + RECORD_S - (time.monotonic() - started))
+            return report, await asyncio.wait_for(arecord_steps(engaged[0], steps), left)
         except Exception:
-            log.exception("could not keep the e-stop's step results with the latch")
-    return report
-
-
-async def _latch(by: str) -> str:
-    engaged = await aengage(by=by)
-    return engaged.message
+            log.warning("could not keep the e-stop's step results with the latch", exc_info=True)
+        return report, Latch(latched=True, by=engaged[0].by, at=engaged[0].at, steps=steps)
+    return report, Latch(latched=zero.ok, by=by, at=pressed, steps=steps)
 
 
 def _username(user: Any) -> str:
@@ -140,16 +169,11 @@ def estop_command(user: Any) -> Command:
     """The stop as one command: role check, latch and steps, one audit entry.
 
     ``send`` leaves the report and the latch as it then stands in ``result`` (``report``,
-    ``latch``; no ``latch`` if the store could not be read), so a caller needs no second trip
-    to the event loop to show them."""
+    ``latch``), so a caller needs no second trip to the event loop to show them."""
 
     async def send(_: Any) -> str:
-        report = await estop_steps(by=_username(user))
-        command.result["report"] = report
-        try:
-            command.result["latch"] = await alatch()
-        except Exception:  # the store is down: the stop is still audited; the caller reads the latch again
-            log.warning("could not read the latch after the e-stop", exc_info=True)
+        report, latch = await estop_steps(by=_username(user))
+        command.result["report"], command.result["latch"] = report, latch
         if not report.ok:
             raise EstopIncomplete(report)
         return report.summary()

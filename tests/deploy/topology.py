@@ -94,6 +94,7 @@ class Topology:
             "STACK_DIR": str(self.dir), "STACK_HTTPS_PORT": str(self.https_port),
             "STACK_HTTP_PORT": str(self.http_port), "STACK_WEB_PORTS": " ".join(map(str, self.web_ports)),
             "STACK_SIM_PORT": str(free_port()), "STACK_VIDEO_PORT": str(free_port()),
+            "STACK_LINK_PORTS": f"127.0.0.1:{free_port()},127.0.0.1:{free_port()}",
             "REDIS_URL": redis_url, "DATABASE_URL": database_url, "CHANNEL_LAYER_PREFIX": self.prefix,
             "STACK_ENV": "\n".join(f"{k}={v}" for k, v in extra.items()),
         }

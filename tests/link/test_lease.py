@@ -113,6 +113,39 @@ async def test_after_redis_restarts_empty_the_holder_takes_its_lease_back(leases
     await asyncio.gather(waiting, renewing, return_exceptions=True)
 
 
+async def test_while_redis_is_out_of_reach_the_holder_may_only_stop_the_robot_then_holds_again(leases, redis_server):
+    a, b = leases("link-a"), leases("link-b")
+    await asyncio.wait_for(a.acquire(), 5)
+    renewing = asyncio.ensure_future(a.hold())
+    waiting = asyncio.ensure_future(b.acquire())
+
+    redis_server.stop()
+    await asyncio.sleep(TTL_S * 1.5)  # past the lease: nobody can prove or take it
+    assert not a.held and a.may_stop and not renewing.done()
+    assert not await a.check()  # nothing but a stop goes out
+    assert not b.may_stop
+
+    redis_server.start()
+    await async_wait_until(lambda: a.held, timeout=3 * TTL_S, what="the holder taking its key back")
+    assert await a.check() and not waiting.done() and not renewing.done()
+    waiting.cancel()
+    renewing.cancel()
+    await asyncio.gather(waiting, renewing, return_exceptions=True)
+
+
+async def test_a_holder_that_finds_its_key_taken_when_redis_returns_gives_up(leases, redis_server):
+    a, b = leases("link-a"), leases("link-b")
+    await asyncio.wait_for(a.acquire(), 5)
+    renewing = asyncio.ensure_future(a.hold())
+    redis_server.stop()
+    await asyncio.sleep(TTL_S * 1.5)
+    assert a.may_stop
+    redis_server.start()
+    redis.Redis.from_url(redis_server.url).set(KEY, b"link-b:elsewhere")  # the other link was quicker
+    await asyncio.wait_for(renewing, 3 * TTL_S)
+    assert a.lost.is_set() and not a.may_stop and not a.held
+
+
 async def test_a_renewing_holder_ends_when_cancelled_even_if_a_renewal_swallowed_the_cancellation(leases):
     """Python 3.11's wait_for, inside redis-py's writes, returns normally in a task cancelled at the
     wrong moment (measured: 145 of 3,000 cancellations of a renewal). The stand-in does that each time."""
