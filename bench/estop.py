@@ -241,6 +241,64 @@ def presses_with_the_database_down() -> list[bool]:
     return results
 
 
+REDIS_PRESSES = 50
+
+
+def _press_ok(stack: Stack, page: Client, *, all_steps: bool) -> bool:
+    """One press: answered within a second, the zero step reported done (every step, with
+    ``all_steps``), and a zero Twist at the robot within 500 ms."""
+    from robot import interface as ri
+
+    pressed = time.time()
+    try:
+        status, body = page.post("/api/robot/estop/", timeout=5)
+    except OSError:
+        return False
+    answered = time.time() - pressed
+    steps = {step["step"]: step["ok"] for step in body.get("steps", [])}
+    deadline = time.monotonic() + 1.0
+    zero = False
+    while not zero and time.monotonic() < deadline:
+        zero = any(m["t"] >= pressed and m["t"] - pressed <= 0.5 and ri.is_zero_twist(m["msg"])
+                   for m in received(stack)[-20:])
+        time.sleep(0.02)
+    done = status == 200 if all_steps else steps.get("zero_velocity", False)
+    return zero and answered <= 1.0 and done
+
+
+def presses_with_redis_faults() -> dict[str, list[bool]]:
+    """Scaled stack on a private redis-server: 50 presses with Redis stopped, 50 with it frozen
+    (SIGSTOP), and 50 each right after a restart (every step must succeed then)."""
+    redis = PrivateRedis().start()
+    results: dict[str, list[bool]] = {"down": [], "frozen": [], "restart": []}
+    try:
+        # A short zero hold: the next press's zero is its own, not the last one's hold.
+        with Stack(redis_url=redis.url, env={"ESTOP_HOLD_S": "0.1"}) as stack:
+            stack.wait_robot_online(timeout=40)
+            page = Client(stack, "otto")
+            redis.stop()
+            time.sleep(3)  # past the link's lease
+            results["down"] = [_press_ok(stack, page, all_steps=False) for _ in range(REDIS_PRESSES)]
+            redis.start()
+            time.sleep(3)
+            assert redis.proc is not None
+            os.kill(redis.proc.pid, signal.SIGSTOP)
+            try:
+                time.sleep(3)
+                results["frozen"] = [_press_ok(stack, page, all_steps=False) for _ in range(REDIS_PRESSES)]
+            finally:
+                os.kill(redis.proc.pid, signal.SIGCONT)
+            time.sleep(3)
+            for _ in range(REDIS_PRESSES):
+                page.post("/api/robot/estop/release/", {"confirm": True})
+                redis.stop()
+                redis.start()
+                results["restart"].append(_press_ok(stack, page, all_steps=True))
+    finally:
+        redis.stop()
+    return results
+
+
 def banner_on_all_pages(stack: Stack) -> list[float]:
     from playwright.sync_api import sync_playwright
 
@@ -313,6 +371,7 @@ def main() -> None:
         race = mode_race(stack)
         banners = banner_on_all_pages(stack)
     db_down = presses_with_the_database_down()
+    redis_faults = presses_with_redis_faults()
     # The killed process's driver keeps the drive lock until it expires: make that quick.
     redis = PrivateRedis().start()
     try:
@@ -332,6 +391,9 @@ def main() -> None:
     print(f"estop_race_events_after_answer: {sum(race)}")
     print(f"estop_db_down_ok_pct: {100 * sum(db_down) / len(db_down):.1f}")
     print(f"estop_db_down_presses: {len(db_down)}")
+    for fault, name in (("down", "redis_down"), ("frozen", "redis_frozen"), ("restart", "after_redis_restart")):
+        presses = redis_faults[fault]
+        print(f"estop_{name}_ok_pct: {100 * sum(presses) / len(presses):.1f}")
     print(f"estop_race_runs: {len(race)}")
     print(f"estop_trials: {len(stopped['zero'])}")
     print(f"estop_banner_samples: {len(banners)}")
