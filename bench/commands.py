@@ -17,6 +17,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from tests.stack import PASSWORD, Stack
 
 SPEECH_N = 200
+# The process's capacity, not one caller's allowance: no per-caller limits.
+UNTHROTTLED = {"COMMAND_THROTTLE_RATE": "100000/min", "READ_THROTTLE_PER_S": "0"}
 MODE_N = 10
 
 
@@ -33,7 +35,7 @@ def pct(values: list[float], p: float) -> float:
 
 
 def main() -> None:
-    with Stack(sim_args=("--startup-s", "0.5"), env={"COMMAND_THROTTLE_RATE": "100000/min"}) as stack:
+    with Stack(sim_args=("--startup-s", "0.5"), env=UNTHROTTLED) as stack:
         stack.wait_robot_online()
         token = call(f"{stack.url}/api/auth/token/", {"username": "otto", "password": PASSWORD})["token"]
         speech = []

@@ -9,8 +9,11 @@ shown on each page. Scaled stack (private redis-server, simulator, Daphne, robot
 web process is SIGKILLed while its driver holds W; from the kill to the zero Twist the link
 publishes by itself. The mode race: Behaviour requested, the E-STOP pressed 0.05-0.5 s later,
 20 times: every mode event, mode string or emotion-system switch that reached the robot after
-the E-STOP's answer and was not the stop's own last message still on the wire. Prints
-``name: value`` lines; the machine may be shared.
+the E-STOP's answer and was not the stop's own last message still on the wire. Faults (private
+PostgreSQL and Redis, really stopped, frozen and restarted): 50 presses each, ok when answered
+within a second with the zero step done and a zero Twist at the robot within 500 ms. Read load
+(scaled stack, wrk): a viewer's token polling the state API on 50, then 250 connections, while an
+operator presses: the press's answer time. Prints ``name: value`` lines; the machine may be shared.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
 from tests.browser.support import login as page_login  # noqa: E402
 from tests.deploy.topology import PrivatePostgres, _as_postgres  # noqa: E402
 from tests.stack import Stack  # noqa: E402
-from tests.support_processes import Client, PrivateRedis, received  # noqa: E402
+from tests.support_processes import Client, PrivateRedis, Script, received  # noqa: E402
 
 TRIALS = 10
 MOTION_WINDOW_S = 5.0
@@ -299,6 +302,51 @@ def presses_with_redis_faults() -> dict[str, list[bool]]:
     return results
 
 
+READ_LOAD = ((50, "state_api_50"), (250, "state_api_250"))
+LOAD_PRESSES = 20
+
+
+def presses_under_read_load() -> dict[str, list[float]]:
+    """Scaled stack: a viewer's script polls the state API with a token on 50 keep-alive
+    connections (wrk), then on 250; meanwhile an operator presses the E-STOP 20 times (and
+    releases it): each press's answer time (ms)."""
+    import shutil
+    import subprocess
+
+    if not shutil.which("wrk"):
+        raise SystemExit("wrk is needed for the read load: make wrk")
+    redis = PrivateRedis().start()
+    results: dict[str, list[float]] = {}
+    try:
+        with Stack(redis_url=redis.url) as stack:
+            stack.wait_robot_online(timeout=40)
+            page = Client(stack, "otto")
+            viewer = Script(stack, "vera")
+            for connections, name in READ_LOAD:
+                token = f"Authorization: Token {viewer.token}"
+                load = subprocess.Popen(
+                    ["wrk", "-t", "2", "-c", str(connections), "-d", "60s", "-H", token,
+                     f"{stack.url}/api/robot/state/"],
+                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                try:
+                    time.sleep(2)
+                    answers = []
+                    for _ in range(LOAD_PRESSES):
+                        pressed = time.perf_counter()
+                        status, body = page.post("/api/robot/estop/", timeout=10)
+                        answers.append(1000 * (time.perf_counter() - pressed))
+                        assert status in (200, 502), body
+                        page.post("/api/robot/estop/release/", {"confirm": True})
+                        time.sleep(0.2)
+                    results[name] = answers
+                finally:
+                    load.terminate()
+                    load.wait(5)
+    finally:
+        redis.stop()
+    return results
+
+
 def banner_on_all_pages(stack: Stack) -> list[float]:
     from playwright.sync_api import sync_playwright
 
@@ -372,6 +420,7 @@ def main() -> None:
         banners = banner_on_all_pages(stack)
     db_down = presses_with_the_database_down()
     redis_faults = presses_with_redis_faults()
+    read_load = presses_under_read_load()
     # The killed process's driver keeps the drive lock until it expires: make that quick.
     redis = PrivateRedis().start()
     try:
@@ -391,6 +440,8 @@ def main() -> None:
     print(f"estop_race_events_after_answer: {sum(race)}")
     print(f"estop_db_down_ok_pct: {100 * sum(db_down) / len(db_down):.1f}")
     print(f"estop_db_down_presses: {len(db_down)}")
+    print(f"estop_under_read_load_p99_ms: {p99(read_load['state_api_250']):.1f}")
+    print(f"estop_under_read_load_50_connections_p99_ms: {p99(read_load['state_api_50']):.1f}")
     for fault, name in (("down", "redis_down"), ("frozen", "redis_frozen"), ("restart", "after_redis_restart")):
         presses = redis_faults[fault]
         print(f"estop_{name}_ok_pct: {100 * sum(presses) / len(presses):.1f}")

@@ -16,6 +16,7 @@ from cyborg_site import direct_frames, reaping  # noqa: E402
 from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
+from cyborg_site.read_throttle import ReadThrottle  # noqa: E402
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
@@ -24,7 +25,8 @@ from robot.link.hosting import autostart_in_daphne  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
-        "http": ClientAddress(CountRequests(FastCommandApp(FastStateApp(django_asgi_app), django_asgi_app))),
+        "http": ClientAddress(CountRequests(ReadThrottle(FastCommandApp(FastStateApp(django_asgi_app),
+                                                                        django_asgi_app)))),
         "websocket": ClientAddress(OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns)))),
     }
 )

@@ -246,6 +246,10 @@ ROBOT_LINK_EMBEDDED = env_bool("ROBOT_LINK_EMBEDDED", True)
 # --- Commanding ------------------------------------------------------------------------
 MODE_COMMANDER = env_choice("MODE_COMMANDER", "server", ("server", "robot"))
 COMMAND_THROTTLE_RATE = env_str("COMMAND_THROTTLE_RATE", "120/min")
+# Reads (GET) per caller and web process, bursts allowed; a faster caller waits, then 429 (0: off).
+READ_THROTTLE_PER_S = env_float("READ_THROTTLE_PER_S", 20.0, minimum=0)
+READ_THROTTLE_BURST = env_float("READ_THROTTLE_BURST", 40.0, minimum=1)
+READ_THROTTLE_WAIT_S = env_float("READ_THROTTLE_WAIT_S", 1.0, minimum=0)
 # The page flags "requested X, state machine in Y" once a mode request is this old.
 MODE_MISMATCH_GRACE_S = env_float("MODE_MISMATCH_GRACE_S", 3.0, minimum=0.5)
 

@@ -88,7 +88,7 @@ class Stack:
             "ROBOT_LINK_MAX_BACKOFF_S": "1",
             "DJANGO_SETTINGS_MODULE": "cyborg_site.settings",
             "PYTHONUNBUFFERED": "1",
-            **({"REDIS_URL": redis_url, "ROBOT_LINK_DIRECT_ADDRESSES": f"127.0.0.1:{free_port()},127.0.0.1:{free_port()}"}
+            **({"REDIS_URL": redis_url, "ROBOT_LINK_DIRECT_ADDRESSES": f"127.0.0.1:{free_port()},{free_port()}"}
                if redis_url else {}),
             **(env or {}),
         }

@@ -82,3 +82,25 @@ def received(stack: Stack, topic: str = "/cmd_vel") -> list[dict]:
         count = json.loads(res.read())["count"]
     with urllib.request.urlopen(f"{url}&last={max(count, 1)}", timeout=5) as res:
         return json.loads(res.read())["messages"]
+
+
+class Script:
+    """A script with an API token."""
+
+    def __init__(self, stack: Stack, username: str) -> None:
+        self.url = stack.url
+        self.token = self._call("POST", "/api/auth/token/", {"username": username, "password": PASSWORD},
+                                auth=False)[1]["token"]
+
+    def post(self, path: str, body: dict | None = None) -> tuple[int, dict]:
+        return self._call("POST", path, body or {})
+
+    def _call(self, method: str, path: str, body: dict, auth: bool = True) -> tuple[int, dict]:
+        headers = {"Content-Type": "application/json", **({"Authorization": f"Token {self.token}"} if auth else {})}
+        request = urllib.request.Request(f"{self.url}{path}", data=json.dumps(body).encode(), method=method,
+                                         headers=headers)
+        try:
+            with urllib.request.urlopen(request, timeout=10) as res:
+                return res.status, json.loads(res.read())
+        except urllib.error.HTTPError as err:
+            return err.code, json.loads(err.read() or b"{}")

@@ -134,7 +134,7 @@ async def test_while_redis_is_out_of_reach_the_holder_may_only_stop_the_robot_th
 
 
 async def test_a_holder_that_finds_its_key_taken_when_redis_returns_gives_up(leases, redis_server):
-    a, b = leases("link-a"), leases("link-b")
+    a = leases("link-a")
     await asyncio.wait_for(a.acquire(), 5)
     renewing = asyncio.ensure_future(a.hold())
     redis_server.stop()

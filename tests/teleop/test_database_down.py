@@ -4,18 +4,16 @@ reaches the robot, and every one of them is audited once the database returns.""
 
 from __future__ import annotations
 
-import json
 import subprocess
 import time
-import urllib.request
 
 import pytest
 
 from robot import interface as ri
 from tests.deploy.topology import PrivatePostgres, _as_postgres
 from tests.helpers import wait_until
-from tests.stack import PASSWORD, Stack
-from tests.support_processes import Client, received
+from tests.stack import Stack
+from tests.support_processes import Client, Script, received
 from tests.teleop.test_redis_fault import healthz
 
 
@@ -33,28 +31,6 @@ def stack():
     finally:
         running.stop()
         postgres.remove()
-
-
-class Script:
-    """A script with an API token."""
-
-    def __init__(self, stack: Stack, username: str) -> None:
-        self.url = stack.url
-        self.token = self._call("POST", "/api/auth/token/", {"username": username, "password": PASSWORD},
-                                auth=False)[1]["token"]
-
-    def post(self, path: str, body: dict | None = None) -> tuple[int, dict]:
-        return self._call("POST", path, body or {})
-
-    def _call(self, method: str, path: str, body: dict, auth: bool = True) -> tuple[int, dict]:
-        headers = {"Content-Type": "application/json", **({"Authorization": f"Token {self.token}"} if auth else {})}
-        request = urllib.request.Request(f"{self.url}{path}", data=json.dumps(body).encode(), method=method,
-                                         headers=headers)
-        try:
-            with urllib.request.urlopen(request, timeout=10) as res:
-                return res.status, json.loads(res.read())
-        except urllib.error.HTTPError as err:
-            return err.code, json.loads(err.read() or b"{}")
 
 
 def _zero_within(stack: Stack, pressed: float, within_s: float) -> bool:
