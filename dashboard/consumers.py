@@ -8,6 +8,7 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.direct_frames import EXTENSION as FRAMES_EXTENSION
 from dashboard.fastdispatch import NoDatabaseHopMixin
+from dashboard.services_watch import ensure_watching
 from robot import interface as ri
 from robot.commands.reconnect import reconnect
 from robot.link.bus import RobotError, arequest
@@ -36,8 +37,12 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             return
         await self.accept()
         self.hub = await alocal_hub()
-        status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
-        await self.send(text_data=status_text(status))
+        ensure_watching(self.hub)
+        try:
+            status = (await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY)
+        except Exception:  # Redis is away: the page still opens, and its status says so
+            status = None
+        await self.send(text_data=self.hub.status_frame(status_text(status)))
         # Under Daphne: frames written straight to the connection (cyborg_site.direct_frames).
         writer = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.socket = self.hub.attach(self._send_text, writer)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import itertools
+import json
 import logging
 import threading
 import time
@@ -33,7 +34,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from typing import Any, Protocol
 
 from robot.live import trace
-from robot.live.frames import batch_frame, ws_text_frame
+from robot.live.frames import batch_frame, status_text, ws_text_frame
 
 log = logging.getLogger(__name__)
 
@@ -116,6 +117,8 @@ class Hub:
         self._flushing: asyncio.Task | None = None
         self._thread = threading.get_ident()
         self._traced: list[float] = []  # receive times of traced updates not yet written (robot.live.trace)
+        self._link_status = status_text(None)
+        self.services_down: dict[str, str] = {}
 
     # --- sockets ---------------------------------------------------------------------
 
@@ -181,6 +184,25 @@ class Hub:
         if threading.get_ident() != self._thread:
             self.loop.call_soon_threadsafe(self.publish_status, frame)
             return
+        self._link_status = frame
+        self._send_status()
+
+    def set_services(self, down: dict[str, str]) -> None:
+        """The backing services this process cannot reach (name -> what that means), added to every
+        status frame: the link's status travels through Redis, this is what the process sees itself."""
+        if down != self.services_down:
+            self.services_down = down
+            self._send_status()
+
+    def status_frame(self, link_status: str | None = None) -> str:
+        """The status frame as sockets get it: the link's, with this process's view of its services."""
+        frame = link_status if link_status is not None else self._link_status
+        if not self.services_down:
+            return frame
+        return json.dumps({**json.loads(frame), "services_down": self.services_down}, separators=(",", ":"))
+
+    def _send_status(self) -> None:
+        frame = self.status_frame()
         for socket in self.sockets:
             socket.status = frame
         self._dirty.update(self.sockets)

@@ -13,7 +13,18 @@ function setMenu(open) {
 menuButton?.addEventListener("click", () => setMenu(header.dataset.menu !== "open"));
 document.addEventListener("click", (ev) => { if (!header.contains(ev.target)) setMenu(false); });
 
+const strip = document.getElementById("services-strip");
+
+// What this web server cannot reach (its own checks, beside the link's status): on every page.
+function showServices(down) {
+  if (!strip) return;
+  const lines = Object.values(down ?? {});
+  strip.hidden = lines.length === 0;
+  strip.textContent = lines.length ? `${lines.join(". ")}. The E-STOP still works.` : "";
+}
+
 live.onStatus((status) => {
+  showServices(status.services_down);
   if (!pill) return;
   pill.className = `pill ${status.connected ? "pill-ok" : "pill-bad"}`;
   // "Command path down": the link runs but does not answer requests; nothing would reach the robot.

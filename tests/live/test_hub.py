@@ -284,3 +284,26 @@ async def test_updates_offered_in_one_loop_turn_share_one_frame():
     await asyncio.sleep(0.05)
     assert len(writer.frames) == 1
     assert [(u["key"], u["msg"]["data"]) for u in writer.updates()] == [("robot_pose", 1), ("odom", 3)]
+
+
+async def test_the_services_a_process_cannot_reach_ride_on_every_status_frame():
+    hub = Hub(asyncio.get_running_loop(), tick_s=0.01)
+    recorder = Recorder()
+    hub.attach(recorder.send)
+    link_status = frames.status_text({"connected": True, "link_running": True, "url": "ws://robot"})
+    hub.publish_status(link_status)
+    await async_wait_until(lambda: recorder.frames, timeout=2)
+    assert "services_down" not in recorder.frames[-1]
+
+    hub.set_services({"redis": "Redis is unreachable"})
+    await async_wait_until(lambda: len(recorder.frames) == 2, timeout=2)
+    assert recorder.frames[-1]["services_down"] == {"redis": "Redis is unreachable"}
+    # The link's last word, with what this process sees.
+    assert {k: v for k, v in recorder.frames[-1].items() if k != "services_down"} == json.loads(link_status)
+    hub.set_services({"redis": "Redis is unreachable"})  # unchanged: no frame
+    hub.publish_status(frames.status_text({"connected": False, "url": "ws://other"}))
+    await async_wait_until(lambda: len(recorder.frames) == 3, timeout=2)
+    assert recorder.frames[-1]["services_down"] and recorder.frames[-1]["url"] == "ws://other"
+    hub.set_services({})
+    await async_wait_until(lambda: len(recorder.frames) == 4, timeout=2)
+    assert "services_down" not in recorder.frames[-1]

@@ -4,12 +4,15 @@ which steps were done, and the link holds the latch until Redis returns and keep
 
 from __future__ import annotations
 
+import asyncio
+import json
 import os
 import signal
 import time
 
 import pytest
 from django.conf import settings
+from websockets.asyncio.client import connect
 
 from robot import interface as ri
 from tests.helpers import wait_until
@@ -79,3 +82,27 @@ def test_estop_with_redis_frozen(scaled):
     assert page.get("/api/robot/estop/")[1]["by"] == "otto"
     status, body = page.get("/api/audit/?action=estop&limit=5")
     assert status == 200 and len(body["results"]) == 2, body  # both presses audited
+
+
+async def _services_seen(ws, want: str | None, timeout: float) -> dict:
+    """Status frames on a page's live socket until one says ``want`` is down (None: nothing is)."""
+    async with asyncio.timeout(timeout):
+        while True:
+            frame = json.loads(await ws.recv())
+            if frame.get("kind") != "status":
+                continue
+            down = frame.get("services_down") or {}
+            if (want in down) if want else not down:
+                return down
+
+
+async def test_open_pages_say_when_redis_is_down_and_that_the_estop_still_works(scaled):
+    page = await asyncio.to_thread(Client, scaled, "otto")
+    async with connect(f"ws://127.0.0.1:{scaled.web_port}/ws/live/", origin=scaled.url,
+                       additional_headers={"Cookie": page.cookie}) as ws:
+        assert await _services_seen(ws, None, 5) == {}
+        scaled.redis.stop()
+        down = await _services_seen(ws, "redis", 5)
+        assert "commands are refused" in down["redis"], down
+        scaled.redis.start()
+        await _services_seen(ws, None, 10)
