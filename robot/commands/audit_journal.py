@@ -14,6 +14,7 @@ import json
 import logging
 import os
 import time
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from datetime import UTC, datetime
@@ -28,6 +29,7 @@ from robot.commands.audit import client_address
 from robot.models import AuditEntry
 
 log = logging.getLogger(__name__)
+TAKEN_PREFIX = "audit-taken-"
 
 
 def _folder() -> Path:
@@ -67,8 +69,6 @@ def keep(fields: dict[str, Any]) -> None:
             f.flush()
             os.fsync(f.fileno())
             break
-    log.warning("audit: the database is not reachable; %s by %s kept in %s until it is", entry["action"],
-                entry["username"] or "?", _own_file())
 
 
 def _still_there(f: IO[str]) -> bool:
@@ -89,21 +89,40 @@ def pending() -> int:
 
 def replay() -> int:
     """Write every journaled entry to the database and empty the journals; how many were written.
-    Raises the database's error (the journals are kept) while it is still down."""
-    written = 0
+    Raises the database's error (the entries are kept) while it is still down.
+
+    Each journal is first taken aside (renamed, under its lock), so writers append to a fresh one
+    and never wait on a database that hangs; a taken file is locked while it is written, so two
+    processes never write the same one, and removed once written."""
     for path in sorted(_folder().glob("audit-*.jsonl")):
-        with _locked(path, "r+") as f:
+        if not path.name.startswith(TAKEN_PREFIX):
+            _take(path)
+    written = 0
+    for path in sorted(_folder().glob(f"{TAKEN_PREFIX}*.jsonl")):
+        with open(path, encoding="utf-8") as f:
+            try:
+                fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                continue  # another process is writing it
+            if not _still_there(f):
+                continue
             entries = [json.loads(line) for line in f.read().splitlines() if line.strip()]
             if entries:
                 _write(entries)
                 written += len(entries)
-            f.seek(0)
-            f.truncate()
-        if path != _own_file():
-            path.unlink(missing_ok=True)  # (a writer that appends meanwhile starts a file of its own)
+            path.unlink()
     if written:
         log.info("audit: wrote %d journaled entries", written)
     return written
+
+
+def _take(path: Path) -> None:
+    try:
+        with _locked(path, "r") as f:
+            if _still_there(f):
+                path.rename(path.with_name(f"{TAKEN_PREFIX}{uuid.uuid4().hex}.jsonl"))
+    except FileNotFoundError:
+        pass  # another process took it first
 
 
 def _write(entries: list[dict[str, Any]]) -> None:

@@ -16,6 +16,7 @@ logged here and raised to the caller.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import queue
 import threading
@@ -34,6 +35,7 @@ IDLE_CLOSE_S = 10.0
 PROBE_S = 1.0
 
 _Job = tuple[Future, dict[str, Any] | None]  # no fields: close the connection
+_REPLAY: dict[str, Any] = {}  # fields that say: write what the journals hold
 
 
 def _write(fields: dict[str, Any]) -> AuditEntry:
@@ -74,9 +76,30 @@ class AuditWriter:
             self._ensure_thread()  # it probes the database and writes the journal when it is back
             return None
 
+    def keep_then_write(self, *, wait_s: float, **fields: Any) -> None:
+        """Journal the entry (on disk before this returns), then have the writer's thread write it;
+        wait for that at most ``wait_s``: the caller never waits longer on the database, however it
+        hangs (the E-STOP's own entries)."""
+        audit_journal.keep(fields)
+        self._ensure_thread()
+        written: Future[None] = Future()
+        self._jobs.put((written, _REPLAY))
+        with contextlib.suppress(TimeoutError):
+            written.result(wait_s)
+
     def _keep(self, fields: dict[str, Any]) -> None:
         audit_journal.keep(fields)
+        log.warning("audit: the database is not reachable; %s by %s journaled until it is", fields.get("action"),
+                    getattr(fields.get("user"), "username", "?"))
         self.down = True
+
+    def _replay(self) -> None:
+        try:
+            audit_journal.replay()
+        except (OperationalError, InterfaceError):
+            connection.close()
+            self.down = True
+            log.warning("audit: the database is not reachable; journaled entries wait until it is")
 
     def _recover(self) -> None:
         try:
@@ -113,6 +136,13 @@ class AuditWriter:
                 continue
             if fields is None:
                 connection.close()
+                _settle(future)
+                continue
+            if fields is _REPLAY:
+                if self.down:
+                    self._recover()
+                else:
+                    self._replay()
                 _settle(future)
                 continue
             try:

@@ -23,6 +23,7 @@ to the robot, because every crossing queues behind whatever else that thread or 
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -36,10 +37,22 @@ from robot.commands.gate import Declaration, declaration
 from robot.commands.latch import ensure_released
 from robot.link.bus import RobotError, stopping
 
-_record = writer.record
-_record_here = writer.record_here
+
+async def _record(**fields: Any) -> Any:
+    if fields["action"] in UNAUDITED_OK:
+        return await asyncio.to_thread(_record_here, **fields)
+    return await writer.record(**fields)
+
+
+def _record_here(**fields: Any) -> Any:
+    if fields["action"] in UNAUDITED_OK:  # the stop never waits long on the database, however it hangs
+        return writer.keep_then_write(**fields, wait_s=AUDIT_WAIT_S)
+    return writer.record_here(**fields)
+
+
 # Run while the audit cannot be written (its entries journaled meanwhile); every other command waits.
 UNAUDITED_OK = frozenset({"estop", "estop.release"})
+AUDIT_WAIT_S = 0.2  # their entry is on disk at once; written to the database by then, normally
 
 
 class Forbidden(RobotError):

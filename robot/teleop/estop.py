@@ -25,8 +25,8 @@ log = logging.getLogger(__name__)
 
 STEP_TIMEOUT_S = 3.0
 ATTEMPT_TIMEOUT_S = STEP_TIMEOUT_S + 2  # a step that outlives its own time-outs is given up on
-ANSWER_S = 0.9  # the answer says what was done by then; a step still running goes on
-RECORD_S = 0.2  # and keeping the steps with the latch may take this much more
+ANSWER_S = 0.6  # the answer says what was done by then; a step still running goes on
+RECORD_S = 0.1  # and keeping the steps with the latch may take this much more (the audit entry 0.2 s)
 
 
 @dataclass(frozen=True)

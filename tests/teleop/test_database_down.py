@@ -83,3 +83,37 @@ def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_i
                what="commands accepted again")
     assert script.post("/api/robot/speech/", {"text": "after"})[0] == 200
     assert healthz(stack)[0] == 200
+
+
+def _postgres_processes(postgres) -> list[int]:
+    main = int((postgres.data / "postmaster.pid").read_text().split()[0])
+    children = subprocess.run(["ps", "-o", "pid=", "--ppid", str(main)], capture_output=True, text=True).stdout
+    return [main, *map(int, children.split())]
+
+
+def test_the_estop_works_with_the_database_frozen(stack):
+    import os
+    import signal
+
+    page, script = Client(stack, "otto"), Script(stack, "olga")
+    assert script.post("/api/robot/speech/", {"text": "before"})[0] == 200
+    frozen = _postgres_processes(stack.postgres)
+    for pid in frozen:
+        os.kill(pid, signal.SIGSTOP)
+    try:
+        for who in (page, script):
+            pressed = time.time()
+            status, body = who.post("/api/robot/estop/")
+            answered = time.time() - pressed
+            wait_until(lambda t=pressed: _zero_within(stack, t, 0.5), timeout=5, what="a zero Twist within 500 ms")
+            assert status == 200 and answered <= 1.0, (status, answered, body)
+            assert who.post("/api/robot/estop/release/", {"confirm": True})[0] == 200
+    finally:
+        for pid in frozen:
+            os.kill(pid, signal.SIGCONT)
+
+    def audited() -> bool:
+        status, body = page.get("/api/audit/?action=estop&limit=5")
+        return status == 200 and len(body["results"]) == 2
+
+    wait_until(audited, timeout=20, what="both presses audited once the database answers")
