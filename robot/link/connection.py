@@ -158,6 +158,7 @@ class RobotLink:
         self._latch_msg: dict[str, Any] = {}
         # The last E-STOP this link took (epoch, who): written to the shared store if the store missed it.
         self._pressed_at = 0.0
+        self._in_order = asyncio.Lock()
         self._pressed_by = ""
         self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
@@ -540,10 +541,19 @@ class RobotLink:
             self._pressed_by = str(request.get("by") or self._pressed_by)
         if not self.connected or self.ros is None or not self.ros.is_connected:
             return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if op == "publish" and self.lease is not None and not request.get("emergency"):
+            # One at a time through the fencing check's round trip to Redis, in the order they came:
+            # a driver's last Twist must not overtake the zero sent after it.
+            async with self._in_order:
+                return await self._fenced(request)
+        return await self._fenced(request)
+
+    async def _fenced(self, request: LinkRequest) -> LinkReply:
         if self.lease is not None and not await self._fenced_ok(request):
             # The fencing check: another link may hold the lease now; never command the robot twice.
             return {"ok": False, "error_code": "offline",
                     "error": "This robot link lost its lease; the other one takes over"}
+        op = request.get("op")
         if op == "estop":
             return {"ok": True}
         if op == "publish":

@@ -223,3 +223,33 @@ async def test_it_stops_cleanly_when_its_request_loop_was_cancelled(link, sim):
         await link._serving
     await asyncio.wait_for(link.stop(), 10)  # returns, and raises nothing
     assert link.ros is None and not link.connected
+
+
+class _SlowThenFastLease:
+    """A lease whose fencing check answers the first publish last (two pooled Redis connections)."""
+
+    held = may_stop = True
+
+    def __init__(self) -> None:
+        self.checks = 0
+
+    async def check(self) -> bool:
+        self.checks += 1
+        await asyncio.sleep(0.1 if self.checks == 1 else 0)
+        return True
+
+
+async def test_publishes_reach_the_robot_in_the_order_they_came_whatever_the_fencing_check_takes(link, sim):
+    cmd_vel = ri.topic("cmd_vel")
+    moving = {"linear": {"x": 0.5, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    zero = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    link.lease = _SlowThenFastLease()
+    try:
+        before = sim.robot.received_count(cmd_vel.name)
+        replies = await asyncio.gather(*(link.execute({"op": "publish", "topic": cmd_vel.name, "msg_type": cmd_vel.type,
+                                                       "msg": msg}) for msg in (moving, zero)))
+        assert all(r["ok"] for r in replies), replies
+        await async_wait_until(lambda: sim.robot.received_count(cmd_vel.name) == before + 2, timeout=5)
+    finally:
+        link.lease = None
+    assert ri.is_zero_twist(sim.received(cmd_vel.name)[-1])  # the driver's zero came last, as sent
