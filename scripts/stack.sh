@@ -68,10 +68,22 @@ write_env() {
 # Run a command with the stack's environment.
 in_env() { (set -a; . "$ENV_FILE"; set +a; exec "$@"); }
 
-# Start NAME in its own session, output to logs/NAME.log, pid to pids/NAME.pid.
+# Start NAME in its own session, output to logs/NAME.log, pid to pids/NAME.pid. As the systemd units
+# do (Restart=always, RestartSec=1), a process that dies on its own is started again a second later:
+# pids/NAME.pid is the session's keeper, pids/NAME.child the process it runs now. Stopping (or
+# killing) the whole session ends both.
 start() {
   local name=$1; shift
-  (set -a; . "$ENV_FILE"; set +a; exec setsid "$@" >>"$LOGS/$name.log" 2>&1 </dev/null) &
+  (set -a; . "$ENV_FILE"; set +a; exec setsid bash -c '
+    child=$1; shift
+    trap '"'"'kill -TERM "$pid" 2>/dev/null; wait "$pid"; exit 0'"'"' TERM INT
+    while :; do
+      "$@" & pid=$!
+      echo "$pid" >"$child"
+      wait "$pid" || true
+      echo "stack.sh: $(date -Is) exited; starting it again in 1 s"
+      sleep 1
+    done' keep "$PIDS/$name.child" "$@" >>"$LOGS/$name.log" 2>&1 </dev/null) &
   echo $! >"$PIDS/$name.pid"
 }
 
@@ -109,7 +121,7 @@ stop() {
     pid=$(<"$PIDS/$name.pid")
     for _ in $(seq 100); do ours "$pid" || break; sleep 0.1; done
     if ours "$pid"; then say "$name ($pid) ignored SIGTERM; killing it"; kill -KILL -- "-$pid" 2>/dev/null || true; fi
-    rm -f "$PIDS/$name.pid"
+    rm -f "$PIDS/$name.pid" "$PIDS/$name.child"
   done
 }
 

@@ -306,3 +306,11 @@ def test_a_forged_forwarded_address_neither_escapes_a_lockout_nor_lands_in_it(to
         assert rows.strip().splitlines()[-1] == "['127.0.0.1']", rows  # the real address, never a forged one
     finally:
         topology.manage("axes_reset")
+
+
+def test_a_process_that_dies_is_started_again_like_the_units_do(topology):
+    crashed = topology.crash("worker")
+    topology.wait(lambda: topology.child("worker") != crashed and os.path.exists(f"/proc/{topology.child('worker')}"),
+                  timeout=10, what="the worker started again")
+    assert topology.alive("worker")
+    assert "exited; starting it again" in topology.log("worker")

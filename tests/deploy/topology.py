@@ -148,7 +148,18 @@ class Topology:
         return Path(f"/proc/{self.pid(name)}/status").read_text().find("State:\tZ") < 0
 
     def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
+        """The whole of NAME, its keeper too: it stays down (until ``restart``)."""
         os.killpg(self.pid(name), sig)
+
+    def child(self, name: str) -> int:
+        """The process NAME's keeper runs now (a new one after each death)."""
+        return int((self.dir / "pids" / f"{name}.child").read_text())
+
+    def crash(self, name: str, sig: int = signal.SIGKILL) -> int:
+        """Kill the process NAME runs, as a crash would (its keeper starts it again); its pid."""
+        pid = self.child(name)
+        os.kill(pid, sig)
+        return pid
 
     def log(self, name: str) -> str:
         path = self.dir / "logs" / f"{name}.log"
