@@ -3,12 +3,14 @@ started again for real, and helpers to drive a stack over HTTP and websockets.""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import subprocess
 import urllib.error
 import urllib.parse
 import urllib.request
+from collections.abc import Iterator
 from http.cookiejar import CookieJar
 
 from tests.stack import PASSWORD, Stack, free_port, wait_for_port
@@ -104,3 +106,14 @@ class Script:
                 return res.status, json.loads(res.read())
         except urllib.error.HTTPError as err:
             return err.code, json.loads(err.read() or b"{}")
+
+
+@contextlib.contextmanager
+def online(stack: Stack) -> Iterator[Stack]:
+    """``stack`` started, its robot online; stopped afterwards however the test ends."""
+    try:
+        stack.start()
+        stack.wait_robot_online(timeout=40)
+        yield stack
+    finally:
+        stack.stop()

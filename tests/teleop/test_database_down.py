@@ -13,7 +13,7 @@ from robot import interface as ri
 from tests.deploy.topology import PrivatePostgres, _as_postgres
 from tests.helpers import wait_until
 from tests.stack import Stack
-from tests.support_processes import Client, Script, received
+from tests.support_processes import Client, Script, online, received
 from tests.teleop.test_redis_fault import healthz
 
 
@@ -25,11 +25,9 @@ def stack():
     running = Stack(env={"DATABASE_URL": postgres.url})
     running.postgres = postgres
     try:
-        running.start()
-        running.wait_robot_online(timeout=40)
-        yield running
+        with online(running):
+            yield running
     finally:
-        running.stop()
         postgres.remove()
 
 

@@ -17,7 +17,7 @@ from websockets.asyncio.client import connect
 from robot import interface as ri
 from tests.helpers import wait_until
 from tests.stack import Stack
-from tests.support_processes import Client, PrivateRedis, received
+from tests.support_processes import Client, PrivateRedis, online, received
 
 pytestmark = [pytest.mark.redis, pytest.mark.skipif(not settings.REDIS_URL, reason="scaled wiring: services pass")]
 
@@ -44,11 +44,9 @@ def scaled():
     stack = Stack(redis_url=redis.url)
     stack.redis = redis
     try:
-        stack.start()
-        stack.wait_robot_online(timeout=40)
-        yield stack
+        with online(stack):
+            yield stack
     finally:
-        stack.stop()
         redis.stop()
 
 
