@@ -24,7 +24,7 @@ from robot import interface as ri
 from robot.bounded import cancel_within, within
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
-from robot.link.rosclient import LinkRos
+from robot.link.rosclient import LinkRos, call_service
 from robot.live import trace
 from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.fanout import Coalescer
@@ -609,28 +609,11 @@ class RobotLink:
         refused = self._held_back(request, request["service"], request.get("args") or {})
         if refused:
             return refused
-        loop = asyncio.get_running_loop()
-        future: asyncio.Future = loop.create_future()
-
-        def settle(ok: bool, value: Any) -> None:
-            if not future.done():
-                future.set_result((ok, value))
-
-        service = roslibpy.Service(self.ros, request["service"], request["service_type"])
-        service.call(
-            roslibpy.ServiceRequest(request.get("args") or {}),
-            callback=lambda values: self._threadsafe(settle, True, dict(values)),
-            errback=lambda error: self._threadsafe(settle, False, error),
-        )
+        assert self.ros is not None
         timeout = float(request.get("timeout") or self.service_timeout_s)
-        try:
-            ok, value = await asyncio.wait_for(future, timeout)
-        except TimeoutError:
-            error = f"{request['service']} did not answer in {timeout:g} s"
-            return {"ok": False, "error_code": "timeout", "error": error}
-        if ok:
-            return {"ok": True, "values": value}
-        return {"ok": False, "error_code": "failed", "error": str(value)}
+        reply = await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
+                                   timeout)
+        return cast(LinkReply, reply)
 
 
 def _close_quietly(ros: roslibpy.Ros) -> None:

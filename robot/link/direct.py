@@ -4,7 +4,8 @@ Scaled, web processes reach the link through Redis; a stop must not depend on it
 link also listens on a TCP address of its own (``ROBOT_LINK_DIRECT_ADDRESSES``: one per link
 process, each binds the first one free) and takes the E-STOP's own requests (marked ``emergency``,
 ``robot.link.bus.emergency``). A web process sends those to every address at once and takes the
-answer of the link that is active; the others are closed (a standby listens nowhere). One request
+answer of the link that is active (a standby listens too, and only stops the robot:
+``robot.link.standby``). One request
 per connection: a line of JSON signed with the secret key (``django.core.signing``, valid for a few
 seconds), answered by a line of JSON.
 """
@@ -26,6 +27,7 @@ log = logging.getLogger(__name__)
 SALT = "robot.link.direct"
 MAX_AGE_S = 10
 CONNECT_TIMEOUT_S = 0.3
+ACTIVE_GRACE_S = 0.15  # after a standby stopped the robot, how long the active link's answer is waited for
 LINE_LIMIT = 256 * 1024
 
 
@@ -91,24 +93,38 @@ async def _answer(reader: asyncio.StreamReader, writer: asyncio.StreamWriter, ex
 
 
 async def ask(request: LinkRequest, timeout: float) -> LinkReply:
-    """Send ``request`` to every link address; the reply of the one that acted (the first that is
-    not "offline"), else the last refusal; ``Unreachable`` if no link listens."""
+    """Send ``request`` to every link address; the reply of the active link (the first that is not
+    "offline"); else, ``ACTIVE_GRACE_S`` after a standby stopped the robot, the standby's; else the
+    last refusal; ``Unreachable`` if no link listens."""
     line = signing.dumps(dict(request), salt=SALT, compress=True).encode() + b"\n"
     pending = {asyncio.ensure_future(_one(host, port, line, timeout)) for host, port in addresses()}
+    loop = asyncio.get_running_loop()
+    standby: LinkReply | None = None
     refusal: LinkReply | None = None
+    grace_end = 0.0
     try:
         while pending:
-            done, pending = await asyncio.wait(pending, return_when=asyncio.FIRST_COMPLETED)
+            wait = None if standby is None else max(0.0, grace_end - loop.time())
+            done, pending = await asyncio.wait(pending, timeout=wait, return_when=asyncio.FIRST_COMPLETED)
+            if not done:
+                break  # the active link did not answer within the grace: the standby stopped the robot
             for task in done:
                 reply = None if task.exception() else task.result()
                 if reply is None:
                     continue
-                if reply.get("ok") or reply.get("error_code") != "offline":
+                if reply.get("standby"):
+                    if reply.get("ok") and standby is None:
+                        standby, grace_end = reply, loop.time() + ACTIVE_GRACE_S
+                    refusal = refusal or reply
+                elif reply.get("ok") or reply.get("error_code") != "offline":
                     return reply
-                refusal = reply
+                else:
+                    refusal = reply
     finally:
         for task in pending:
             task.cancel()
+    if standby is not None:
+        return standby
     if refusal is not None:
         return refusal
     raise Unreachable("no robot link answered on the direct stop path")

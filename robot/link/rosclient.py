@@ -11,6 +11,7 @@ surrogates in the robot's text (they break every UTF-8 encoder downstream) with 
 
 from __future__ import annotations
 
+import asyncio
 import json
 import logging
 import time
@@ -112,3 +113,32 @@ class LinkRos(roslibpy.Ros):
         self.factory.protocol = LinkProtocol
         self.factory.array_topics = self._array_topics
         super().connect()
+
+
+async def call_service(ros: roslibpy.Ros, name: str, service_type: str, args: dict[str, Any],
+                       timeout: float) -> dict[str, Any]:
+    """Call a service over ``ros`` from the event loop without blocking it: the link's reply shape
+    (``ok`` and ``values``, or ``error_code`` and ``error``)."""
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future = loop.create_future()
+
+    def settle(ok: bool, value: Any) -> None:
+        if not future.done():
+            future.set_result((ok, value))
+
+    def from_reactor(ok: bool, value: Any) -> None:
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(settle, ok, value)
+
+    roslibpy.Service(ros, name, service_type).call(
+        roslibpy.ServiceRequest(args),
+        callback=lambda values: from_reactor(True, dict(values)),
+        errback=lambda error: from_reactor(False, error),
+    )
+    try:
+        ok, value = await asyncio.wait_for(future, timeout)
+    except TimeoutError:
+        return {"ok": False, "error_code": "timeout", "error": f"{name} did not answer in {timeout:g} s"}
+    if ok:
+        return {"ok": True, "values": value}
+    return {"ok": False, "error_code": "failed", "error": str(value)}

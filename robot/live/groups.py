@@ -111,5 +111,6 @@ class LinkReply(TypedDict, total=False):
     error: str
     error_code: str  # offline | timeout | failed | invalid
     values: Any
+    standby: bool  # answered by a standby link, which only stops the robot (robot.link.standby)
     listeners: int  # audio: how many listeners hold a lease
     refused: dict[str, dict[str, str]]  # topics_watch: topic -> {code, error} for the ones not watched

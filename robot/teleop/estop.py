@@ -62,7 +62,9 @@ class EstopIncomplete(RobotError):
 
 async def _zero_velocity(by: str) -> str:
     # The link publishes zero now and for a short hold, and refuses motion until released.
-    await arequest("estop", timeout=STEP_TIMEOUT_S, by=by, at=time.time())
+    reply = await arequest("estop", timeout=STEP_TIMEOUT_S, by=by, at=time.time())
+    if reply.get("standby"):
+        return "zero Twist sent and held by the standby link (the active one did not answer)"
     return "zero Twist sent and held"
 
 

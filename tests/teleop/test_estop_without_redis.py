@@ -104,3 +104,16 @@ async def test_open_pages_say_when_redis_is_down_and_that_the_estop_still_works(
         assert "commands are refused" in down["redis"], down
         scaled.redis.start()
         await _services_seen(ws, None, 10)
+
+
+def test_while_the_active_link_is_dead_the_standby_stops_the_robot(scaled):
+    page = Client(scaled, "otto")
+    active = scaled.link_proc
+    standby = scaled.start_link()
+    wait_until(lambda: "standby, waiting for the lease" in scaled.log("link"), timeout=30, what="the second link")
+    time.sleep(2)  # its own rosbridge connection is up
+    os.killpg(active.pid, signal.SIGKILL)
+    status, body, _ = _press(scaled, page)  # long before the standby holds the lease
+    zero = next(s for s in body["steps"] if s["step"] == "zero_velocity")
+    assert zero["ok"] and "standby" in zero["detail"], body
+    assert standby.poll() is None

@@ -13,9 +13,12 @@ from django.conf import settings
 from django.core.management.base import BaseCommand
 
 from robot.bounded import cancel_within, describe
+from robot.link import direct
 from robot.link.hosting import start_link, stop_link
 from robot.link.lease import Lease
+from robot.link.standby import StandbyStop
 from robot.live.state import redis_key
+from robot.supervisor import supervise
 
 LEASE_KEY = "link-lease"
 RETRY_AFTER_FAILURE_S = 1.0
@@ -63,7 +66,7 @@ class Command(BaseCommand):
             while not stop.is_set():
                 self._say(f"Robot link {name}: standby, waiting for the lease.")
                 try:
-                    if not await _first(lease.acquire(), stop.wait()):
+                    if not await _first(_standing_by(lease), stop.wait()):
                         break
                     await self._hold(lease, stop, name)
                 except Exception:
@@ -92,6 +95,17 @@ class Command(BaseCommand):
                 if renewing is not None:
                     await cancel_within([renewing], 1)
                     await lease.release()
+
+
+async def _standing_by(lease: Lease) -> None:
+    """Wait for the lease; meanwhile, with the direct path set up, ready to stop the robot (robot.link.standby)."""
+    if not direct.enabled():
+        return await lease.acquire()
+    stopper = supervise("link.standby-stop", StandbyStop(settings.ROSBRIDGE_URL).run)
+    try:
+        await lease.acquire()
+    finally:
+        await cancel_within([stopper], 3)
 
 
 def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:

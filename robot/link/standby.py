@@ -1,0 +1,100 @@
+"""A standby link can stop the robot too: the E-STOP does not wait for a failover.
+
+The link that holds the lease is the only one that commands the robot. When it dies, the standby
+takes over a lease's time later; an E-STOP pressed in between would reach nobody. So while a link
+process waits for the lease it keeps a rosbridge connection of its own and listens on the direct
+path (``robot.link.direct``) for the E-STOP's requests, and does only what stops the robot: a zero
+Twist (repeated for the hold), and the publishes and service calls that pass the latch as the
+stop's own (cancel goals, motors off, mode stop). Stopping twice is harmless; its replies say
+``standby`` so a web process prefers the active link's.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import Any, cast
+
+import roslibpy
+from django.conf import settings
+
+from robot import interface as ri
+from robot.bounded import within
+from robot.link import direct
+from robot.link.rosclient import LinkRos, call_service
+from robot.live.groups import LinkReply, LinkRequest
+
+log = logging.getLogger(__name__)
+
+ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+
+
+class StandbyStop:
+    def __init__(self, url: str) -> None:
+        self.url = url
+        self.ros: roslibpy.Ros | None = None
+        self._publishers: dict[str, roslibpy.Topic] = {}
+        self._holds: set[asyncio.Task] = set()
+
+    async def run(self) -> None:
+        """Connect (and keep reconnecting) and answer on the direct path until cancelled."""
+        from twisted.internet import reactor
+
+        self.ros = LinkRos(self.url)
+        self.ros.factory.maxDelay = settings.ROBOT_LINK_MAX_BACKOFF_S
+        if not reactor.running:
+            self.ros.factory.manager.run()
+        try:
+            await direct.serve(self.answer)
+        finally:
+            for hold in self._holds:
+                hold.cancel()
+            ros, self.ros = self.ros, None
+            ros.factory.stopTrying()
+            if ros.is_connected:
+                try:
+                    await within(asyncio.get_running_loop().run_in_executor(None, ros.close, 2), 3)
+                except Exception:
+                    log.debug("the standby's rosbridge connection did not close cleanly", exc_info=True)
+
+    async def answer(self, request: LinkRequest) -> LinkReply:
+        reply = await self._stop(request)
+        reply["standby"] = True
+        return reply
+
+    async def _stop(self, request: LinkRequest) -> LinkReply:
+        if self.ros is None or not self.ros.is_connected:
+            return {"ok": False, "error_code": "offline", "error": "standby link: no connection to the robot"}
+        op = request.get("op")
+        cmd_vel = ri.topic("cmd_vel")
+        if op == "estop":
+            self._publish(cmd_vel.name, cmd_vel.type, ZERO_TWIST)
+            task = asyncio.ensure_future(self._hold_zero())
+            self._holds.add(task)
+            task.add_done_callback(self._holds.discard)
+            return {"ok": True}
+        name = request.get("topic") if op == "publish" else request.get("service")
+        msg: dict[str, Any] = (request.get("msg") if op == "publish" else request.get("args")) or {}
+        stops = ri.is_zero_twist(msg) if name == cmd_vel.name else ri.passes_latch(str(name), msg, by_the_stop=True)
+        if op not in ("publish", "call_service") or not stops:
+            return {"ok": False, "error_code": "offline", "error": "a standby link only stops the robot"}
+        if op == "publish":
+            self._publish(request["topic"], request["msg_type"], msg)
+            return {"ok": True}
+        timeout = float(request.get("timeout") or settings.ROBOT_REQUEST_TIMEOUT_S)
+        return cast(LinkReply, await call_service(self.ros, request["service"], request["service_type"], msg, timeout))
+
+    def _publish(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
+        assert self.ros is not None
+        topic = self._publishers.get(name)
+        if topic is None:
+            topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
+        topic.publish(roslibpy.Message(msg))
+
+    async def _hold_zero(self) -> None:
+        cmd_vel = ri.topic("cmd_vel")
+        loop = asyncio.get_running_loop()
+        end = loop.time() + settings.ESTOP_HOLD_S
+        while loop.time() < end and self.ros is not None and self.ros.is_connected:
+            await asyncio.sleep(1.0 / settings.TELEOP_RATE_HZ)
+            self._publish(cmd_vel.name, cmd_vel.type, ZERO_TWIST)
