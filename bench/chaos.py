@@ -187,8 +187,11 @@ class Chaos:
     # --- the faults ------------------------------------------------------------------
 
     def fault_loop(self, end: float) -> None:
+        deck: list[str] = []
         while not self.stop.wait(random.uniform(*FAULT_EVERY_S)) and time.time() < end:
-            fault = random.choice(FAULTS)
+            if not deck:  # every kind of fault as often as the others, in a random order
+                deck = random.sample(FAULTS, len(FAULTS))
+            fault = deck.pop()
             self.fault = fault
             self.faults += 1
             print(f"{time.strftime('%H:%M:%S')} fault: {fault}", file=sys.stderr, flush=True)
