@@ -42,7 +42,7 @@ _sessions: weakref.WeakSet[TeleopSession] = weakref.WeakSet()
 
 async def halt_all() -> int:
     """The process is shutting down: every session that moved the robot sends zero now."""
-    results = await asyncio.gather(*(s.halt() for s in list(_sessions)), return_exceptions=True)
+    results = await asyncio.gather(*(s.halt(for_good=True) for s in list(_sessions)), return_exceptions=True)
     return sum(1 for r in results if r is True)
 
 
@@ -75,11 +75,14 @@ class TeleopSession:
         self._send = asyncio.Lock()  # one publish at a time, in order: a zero is never overtaken
         self._wake = asyncio.Event()
         self._task: asyncio.Task | None = None
+        self.ended = False
 
     async def drive(self, command: Command) -> Command:
         """New input from the browser; raises NotHolding if this connection lost the lock."""
         _sessions.add(self)
         async with self._send:
+            if self.ended:
+                raise NotHolding("The server is shutting down: reconnect to drive.")
             if not await self.lock.refresh(self.me):
                 raise NotHolding("You do not hold the drive lock.")
             self._last_input = time.monotonic()
@@ -98,8 +101,10 @@ class TeleopSession:
             self._task = supervise(f"teleop.{self.me.owner}", self._run, transient=True)
         return command
 
-    async def halt(self) -> bool:
-        """Stop now (release, page hidden, disconnect, e-stop); True if a zero Twist went out."""
+    async def halt(self, *, for_good: bool = False) -> bool:
+        """Stop now (release, page hidden, disconnect, e-stop); True if a zero Twist went out.
+        ``for_good`` (the process is shutting down): input that still arrives is refused."""
+        self.ended = self.ended or for_good
         self.active = False
         self._wake.set()
         async with self._send:

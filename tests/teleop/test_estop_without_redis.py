@@ -113,7 +113,7 @@ def test_while_the_active_link_is_dead_the_standby_stops_the_robot(scaled):
     wait_until(lambda: "standby, waiting for the lease" in scaled.log("link"), timeout=30, what="the second link")
     time.sleep(2)  # its own rosbridge connection is up
     os.killpg(active.pid, signal.SIGKILL)
-    status, body, _ = _press(scaled, page)  # long before the standby holds the lease
+    _, body, _ = _press(scaled, page)  # long before the standby holds the lease
     zero = next(s for s in body["steps"] if s["step"] == "zero_velocity")
     assert zero["ok"] and "standby" in zero["detail"], body
     assert standby.poll() is None

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
+
 from robot.link.bus import RobotOffline
 from robot.teleop.lock import Holder, MemoryLock
-from robot.teleop.session import TeleopSession, halt_all
+from robot.teleop.session import NotHolding, TeleopSession, halt_all
 from robot.teleop.twist import Command
 from tests.helpers import async_wait_until
 
@@ -44,6 +46,10 @@ async def test_a_shutting_down_process_sends_zero_for_every_driver_that_moved():
         assert moving[0] == FORWARD and moving[-1].is_zero
         assert stopped[-1].is_zero and len([c for c in stopped if c.is_zero]) == 1  # no second zero
         assert idle == []
+        # Input that still arrives while the process drains is refused: the zero stays the last word.
+        with pytest.raises(NotHolding):
+            await drivers[0][0].drive(FORWARD)
+        assert moving[-1].is_zero
     finally:
         for each, _ in drivers:
             await each.close()
