@@ -13,6 +13,8 @@ import logging
 import weakref
 from concurrent.futures import ThreadPoolExecutor
 
+from django.db import connection
+
 from dashboard.health import CHECKS, Check
 from robot.live.hub import Hub
 from robot.supervisor import end_if_cancelled, supervise
@@ -42,7 +44,10 @@ def down_services() -> dict[str, str]:
             check = Check(run.__name__.removeprefix("check_"), False, str(exc))
         if check is not None:
             checks.append(check)
-    return {c.name: MEANING.get(c.name, c.detail or c.name) for c in checks if not c.ok}
+    down = {c.name: MEANING.get(c.name, c.detail or c.name) for c in checks if not c.ok}
+    if "database" in down:
+        connection.close()  # this thread's broken connection; the next check opens a new one
+    return down
 
 
 async def watch(hub: Hub) -> None:

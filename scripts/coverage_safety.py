@@ -20,6 +20,8 @@ SAFETY = {
     "robot/teleop/twist.py": "speed clamping",
     "robot/link/guard.py": "cmd_vel guard (deadman in the link)",
     "robot/link/lease.py": "link lease",
+    "robot/link/direct.py": "the E-STOP's direct path to the links",
+    "robot/link/standby.py": "a standby link's stop (runs in the link process)",
 }
 
 
