@@ -37,9 +37,8 @@ from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 
 from bench.teleop_latency import Simulator, login, moving, zero  # noqa: E402
 from tests.browser.support import login as page_login  # noqa: E402
-from tests.deploy.topology import PrivatePostgres, _as_postgres  # noqa: E402
 from tests.stack import Stack  # noqa: E402
-from tests.support_processes import Client, PrivateRedis, Script, received  # noqa: E402
+from tests.support_processes import Client, PrivateRedis, Script, online_on_private_postgres, received  # noqa: E402
 
 TRIALS = 10
 MOTION_WINDOW_S = 5.0
@@ -237,22 +236,13 @@ def presses_with_the_database_down() -> list[bool]:
     """Embedded stack on a private PostgreSQL, which is stopped: an operator's page presses the
     E-STOP (and releases it) 50 times; a press is ok when it answers 200 within a second and the
     robot gets a zero Twist within 500 ms of it."""
-    import subprocess
-
-    postgres = PrivatePostgres().start()
-    subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port), "-U",
-                                 "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
     results: list[bool] = []
-    try:
-        with Stack(env={"DATABASE_URL": postgres.url}) as stack:
-            stack.wait_robot_online(timeout=40)
-            page = Client(stack, "otto")
-            postgres.stop()
-            for _ in range(DB_DOWN_PRESSES):
-                results.append(_press_ok(stack, page, all_steps=True))
-                page.post("/api/robot/estop/release/", {"confirm": True})
-    finally:
-        postgres.remove()
+    with online_on_private_postgres() as stack:
+        page = Client(stack, "otto")
+        stack.postgres.stop()
+        for _ in range(DB_DOWN_PRESSES):
+            results.append(_press_ok(stack, page, all_steps=True))
+            page.post("/api/robot/estop/release/", {"confirm": True})
     return results
 
 

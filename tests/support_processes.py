@@ -117,3 +117,20 @@ def online(stack: Stack) -> Iterator[Stack]:
         yield stack
     finally:
         stack.stop()
+
+
+@contextlib.contextmanager
+def online_on_private_postgres() -> Iterator[Stack]:
+    """An embedded stack, online, on a PostgreSQL of its own (``stack.postgres``) that a test may stop."""
+    from tests.deploy.topology import PrivatePostgres, _as_postgres
+
+    postgres = PrivatePostgres().start()
+    try:
+        subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port), "-U",
+                                     "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
+        running = Stack(env={"DATABASE_URL": postgres.url})
+        running.postgres = postgres  # type: ignore[attr-defined]
+        with online(running):
+            yield running
+    finally:
+        postgres.remove()

@@ -4,31 +4,20 @@ that the E-STOP still works, and stops saying it when the database is back."""
 from __future__ import annotations
 
 import re
-import subprocess
 
 import pytest
 from playwright.sync_api import expect
 
 from tests.browser.support import login
-from tests.deploy.topology import PrivatePostgres, _as_postgres
-from tests.stack import Stack
-from tests.support_processes import online
+from tests.support_processes import online_on_private_postgres
 
 pytestmark = pytest.mark.browser
 
 
 @pytest.fixture
 def on_private_postgres():
-    postgres = PrivatePostgres().start()
-    subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port),
-                                 "-U", "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
-    running = Stack(env={"DATABASE_URL": postgres.url})
-    running.postgres = postgres
-    try:
-        with online(running):
-            yield running
-    finally:
-        postgres.remove()
+    with online_on_private_postgres() as running:
+        yield running
 
 
 def test_an_open_page_says_the_database_is_down_and_that_the_estop_still_works(browser, on_private_postgres):

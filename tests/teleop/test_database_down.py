@@ -10,25 +10,16 @@ import time
 import pytest
 
 from robot import interface as ri
-from tests.deploy.topology import PrivatePostgres, _as_postgres
 from tests.helpers import wait_until
 from tests.stack import Stack
-from tests.support_processes import Client, Script, online, received
+from tests.support_processes import Client, Script, online_on_private_postgres, received
 from tests.teleop.test_redis_fault import healthz
 
 
 @pytest.fixture
 def stack():
-    postgres = PrivatePostgres().start()
-    subprocess.run(_as_postgres([str(postgres.bin / "psql"), "-h", "127.0.0.1", "-p", str(postgres.port),
-                                 "-U", "postgres", "-c", "CREATE DATABASE cyborg"]), check=True, capture_output=True)
-    running = Stack(env={"DATABASE_URL": postgres.url})
-    running.postgres = postgres
-    try:
-        with online(running):
-            yield running
-    finally:
-        postgres.remove()
+    with online_on_private_postgres() as running:
+        yield running
 
 
 def _zero_within(stack: Stack, pressed: float, within_s: float) -> bool:
