@@ -9,7 +9,6 @@ own sockets (``Hub.set_services``), saying what that means and that the E-STOP s
 from __future__ import annotations
 
 import asyncio
-import logging
 import weakref
 from concurrent.futures import ThreadPoolExecutor
 
@@ -18,8 +17,6 @@ from django.db import connection
 from dashboard.health import CHECKS, Check
 from robot.live.hub import Hub
 from robot.supervisor import end_if_cancelled, supervise
-
-log = logging.getLogger(__name__)
 
 EVERY_S = 1.0
 CHECK_TIMEOUT_S = 2.0

@@ -390,6 +390,9 @@ def action_topic(key: str, suffix: str) -> tuple[str, str]:
 STOPPING_EVENTS: frozenset[str] = frozenset({Event.ABORTED, Event.PREEMPTED, Event.SUSPEND})
 
 
+ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+
+
 def is_zero_twist(msg: dict[str, Any]) -> bool:
     parts = (msg.get("linear") or {}, msg.get("angular") or {})
     return all(float(part.get(axis) or 0.0) == 0.0 for part in parts for axis in ("x", "y", "z"))

@@ -24,7 +24,7 @@ from robot import interface as ri
 from robot.bounded import cancel_within, within
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
-from robot.link.rosclient import LinkRos, call_service
+from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live import trace
 from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.fanout import Coalescer
@@ -75,7 +75,6 @@ _handlers: dict[str, Handler] = {}
 _operations: dict[str, Operation] = {}
 # Called with the link as it starts, before its first message (modules that listen to every topic).
 _start_hooks: list[Callable[[RobotLink], None]] = []
-ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 _array_keys: set[str] = set()
 # Holders of upstream subscriptions: the registry's monitored topics, and a plain subscribe
 # ("subscribe" requests from pages: registry topics subscribed on first demand, kept).
@@ -158,8 +157,8 @@ class RobotLink:
         self._latch_msg: dict[str, Any] = {}
         # The last E-STOP this link took (epoch, who): written to the shared store if the store missed it.
         self._pressed_at = 0.0
-        self._in_order = asyncio.Lock()
         self._pressed_by = ""
+        self._in_order = asyncio.Lock()  # publishes one at a time through the fencing check
         self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
     # --- lifecycle -------------------------------------------------------------------
@@ -232,7 +231,7 @@ class RobotLink:
             ros.factory.stopTrying()
             if ros.is_connected:
                 try:
-                    await within(asyncio.get_running_loop().run_in_executor(None, _close_quietly, ros), 3)
+                    await within(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
                 except TimeoutError:
                     log.warning("the rosbridge connection did not close in time; going on")
         await cancel_within(list(self._inflight), 1)
@@ -571,7 +570,7 @@ class RobotLink:
         known to be lost (Redis out of reach: nobody else can hold it then)."""
         assert self.lease is not None
         if request.get("op") == "estop" or request.get("emergency"):
-            return self.lease.held or self.lease.may_stop
+            return self.lease.may_stop
         return await self.lease.check()
 
     def _held_back(self, request: LinkRequest, name: str, msg: dict[str, Any]) -> LinkReply | None:
@@ -587,7 +586,7 @@ class RobotLink:
         if self.lease is not None and not self.lease.may_stop:
             raise RuntimeError("this robot link no longer holds the lease")
         cmd_vel = ri.topic("cmd_vel")
-        self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ZERO_TWIST))
+        self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ri.ZERO_TWIST))
 
     def _publisher(self, name: str, msg_type: str) -> roslibpy.Topic:
         topic = self._publishers.get(name)
@@ -614,13 +613,6 @@ class RobotLink:
         reply = await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
                                    timeout)
         return cast(LinkReply, reply)
-
-
-def _close_quietly(ros: roslibpy.Ros) -> None:
-    try:
-        ros.close(timeout=2)
-    except Exception:
-        log.debug("close of the rosbridge connection did not complete", exc_info=True)
 
 
 def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:

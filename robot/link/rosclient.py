@@ -142,3 +142,11 @@ async def call_service(ros: roslibpy.Ros, name: str, service_type: str, args: di
     if ok:
         return {"ok": True, "values": value}
     return {"ok": False, "error_code": "failed", "error": str(value)}
+
+
+def close_quietly(ros: roslibpy.Ros) -> None:
+    """Close a rosbridge connection (blocking: from a worker thread), whatever state it is in."""
+    try:
+        ros.close(timeout=2)
+    except Exception:
+        log.debug("close of the rosbridge connection did not complete", exc_info=True)

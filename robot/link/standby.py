@@ -12,6 +12,7 @@ stop's own (cancel goals, motors off, mode stop). Stopping twice is harmless; it
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 from typing import Any, cast
 
@@ -21,13 +22,10 @@ from django.conf import settings
 from robot import interface as ri
 from robot.bounded import within
 from robot.link import direct
-from robot.link.rosclient import LinkRos, call_service
+from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live.groups import LinkReply, LinkRequest
 
 log = logging.getLogger(__name__)
-
-ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
-
 
 class StandbyStop:
     def __init__(self, url: str) -> None:
@@ -52,10 +50,8 @@ class StandbyStop:
             ros, self.ros = self.ros, None
             ros.factory.stopTrying()
             if ros.is_connected:
-                try:
-                    await within(asyncio.get_running_loop().run_in_executor(None, ros.close, 2), 3)
-                except Exception:
-                    log.debug("the standby's rosbridge connection did not close cleanly", exc_info=True)
+                with contextlib.suppress(TimeoutError):
+                    await within(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
 
     async def answer(self, request: LinkRequest) -> LinkReply:
         reply = await self._stop(request)
@@ -68,7 +64,7 @@ class StandbyStop:
         op = request.get("op")
         cmd_vel = ri.topic("cmd_vel")
         if op == "estop":
-            self._publish(cmd_vel.name, cmd_vel.type, ZERO_TWIST)
+            self._publish(cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
             task = asyncio.ensure_future(self._hold_zero())
             self._holds.add(task)
             task.add_done_callback(self._holds.discard)
@@ -97,4 +93,4 @@ class StandbyStop:
         end = loop.time() + settings.ESTOP_HOLD_S
         while loop.time() < end and self.ros is not None and self.ros.is_connected:
             await asyncio.sleep(1.0 / settings.TELEOP_RATE_HZ)
-            self._publish(cmd_vel.name, cmd_vel.type, ZERO_TWIST)
+            self._publish(cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)

@@ -136,12 +136,12 @@ async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
         engaged.append(await aengage(by=by))
         return engaged[0].message
 
+    steps: tuple[tuple[str, Step], ...] = (STEPS[0], ("latch", latch), *STEPS[1:])
     with emergency():  # the steps' requests pass the link's latch, by the direct path where there is one
-        tasks = [asyncio.ensure_future(_attempt(name, step, by))
-                 for name, step in (STEPS[0], ("latch", latch), *STEPS[1:])]
+        tasks = [asyncio.ensure_future(_attempt(name, step, by)) for name, step in steps]
     done, _ = await asyncio.wait(tasks, timeout=ANSWER_S)
     results = []
-    for task, (name, _) in zip(tasks, (STEPS[0], ("latch", latch), *STEPS[1:]), strict=True):
+    for task, (name, _) in zip(tasks, steps, strict=True):
         if task in done:
             results.append(task.result())
         else:
@@ -152,15 +152,15 @@ async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
         results[1] = StepResult("latch", False, f"not in the shared store ({stored.detail}); the robot link holds "
                                 "it and writes it there when the store answers again")
     report = EstopReport((results[1], zero, *results[2:]))
-    steps = report.as_dict()["steps"]
+    done_steps = report.as_dict()["steps"]
     if engaged:
         try:
             left = max(0.05, ANSWER_S + RECORD_S - (time.monotonic() - started))
-            return report, await asyncio.wait_for(arecord_steps(engaged[0], steps), left)
+            return report, await asyncio.wait_for(arecord_steps(engaged[0], done_steps), left)
         except Exception:
             log.warning("could not keep the e-stop's step results with the latch", exc_info=True)
-        return report, Latch(latched=True, by=engaged[0].by, at=engaged[0].at, steps=steps)
-    return report, Latch(latched=zero.ok, by=by, at=pressed, steps=steps)
+        return report, Latch(latched=True, by=engaged[0].by, at=engaged[0].at, steps=done_steps)
+    return report, Latch(latched=zero.ok, by=by, at=pressed, steps=done_steps)
 
 
 def _username(user: Any) -> str:
