@@ -12,6 +12,7 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 
 from robot.api.common import error_responses
+from robot.api.tokens import expires_at, token_for
 
 
 def lockout_message() -> str:
@@ -35,18 +36,24 @@ class TokenView(ObtainAuthToken):
         summary="Get an API token",
         description="Exchange a username and password for a token; send it as `Authorization: Token <token>`. "
                     "After `LOGIN_FAILURE_LIMIT` failures for one account or from one address, both are refused "
-                    "(429, code `locked_out`) for `LOGIN_LOCKOUT_MINUTES`, even with the right password.",
+                    "(429, code `locked_out`) for `LOGIN_LOCKOUT_MINUTES`, even with the right password. "
+                    "A token expires `API_TOKEN_DAYS` after it was made (`expires`; asking again then gives a "
+                    "new one) and dies with a password change.",
         request=inline_serializer("TokenIn", {"username": serializers.CharField(),
                                               "password": serializers.CharField()}),
-        responses={200: inline_serializer("TokenOut", {"token": serializers.CharField()}),
+        responses={200: inline_serializer("TokenOut", {"token": serializers.CharField(),
+                                                       "expires": serializers.DateTimeField(allow_null=True)}),
                    **error_responses(400, 429)},
         tags=["auth"],
     )
     def post(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        serializer = self.get_serializer(data=request.data)
         try:
-            return super().post(request, *args, **kwargs)
+            serializer.is_valid(raise_exception=True)
         except exceptions.ValidationError:
             # django-axes flags the request when the account or address is locked out.
             if getattr(request, "axes_locked_out", False):
                 raise LockedOut() from None
             raise
+        token = token_for(serializer.validated_data["user"])
+        return Response({"token": token.key, "expires": expires_at(token)})
