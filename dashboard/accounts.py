@@ -5,6 +5,8 @@ from __future__ import annotations
 import secrets
 
 from django.contrib.auth.models import Group, Permission, User
+from django.contrib.auth.password_validation import validate_password
+from django.core.exceptions import ValidationError
 
 from cyborg_site.roles import Role
 
@@ -16,6 +18,17 @@ def ensure_role_groups() -> dict[Role, Group]:
     groups = {role: Group.objects.get_or_create(name=role.value)[0] for role in Role}
     groups[Role.ADMIN].permissions.set(Permission.objects.filter(content_type__app_label__in=_ADMIN_APPS))
     return groups
+
+
+def password_problems(password: str, *, username: str, email: str = "") -> list[str]:
+    """Why the password validators (``AUTH_PASSWORD_VALIDATORS``) refuse ``password`` for this user
+    (empty when they accept it)."""
+    user = User.objects.filter(username=username).first() or User(username=username, email=email)
+    try:
+        validate_password(password, user)
+    except ValidationError as exc:
+        return list(exc.messages)
+    return []
 
 
 def create_user(username: str, role: Role, *, password: str | None = None, email: str = "") -> tuple[User, str]:
