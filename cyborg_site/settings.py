@@ -153,9 +153,9 @@ AXES_CLIENT_IP_CALLABLE = "dashboard.lockouts.client_ip"
 AXES_VERBOSE = False
 # API tokens expire this many days after they were made (0: never); a password change ends them.
 API_TOKEN_DAYS = env_float("API_TOKEN_DAYS", 30.0, minimum=0.0)
-# Behind a reverse proxy that appends the client's address to X-Forwarded-For (nginx's
-# $proxy_add_x_forwarded_for): count lockouts against that address, not the proxy's.
-CLIENT_IP_FROM_X_FORWARDED_FOR = env_bool("CLIENT_IP_FROM_X_FORWARDED_FOR", False)
+# The reverse proxies (addresses or networks) whose X-Forwarded-For and X-Forwarded-Proto are
+# believed: the client address of lockouts, throttles and the audit (cyborg_site.client_address).
+TRUSTED_PROXIES = env_list("TRUSTED_PROXIES", [])
 LOGIN_URL = "login"
 LOGIN_REDIRECT_URL = "dashboard:home"
 LOGOUT_REDIRECT_URL = "login"

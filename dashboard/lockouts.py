@@ -26,11 +26,7 @@ def lockout_response(request: HttpRequest, original_response: Any = None, creden
 
 
 def client_ip(request: HttpRequest) -> str:
-    """The address a lockout counts against: behind a trusted proxy, the one it appended last."""
-    if settings.CLIENT_IP_FROM_X_FORWARDED_FOR:
-        forwarded = [part.strip() for part in request.META.get("HTTP_X_FORWARDED_FOR", "").split(",")]
-        if forwarded and forwarded[-1]:
-            return forwarded[-1]
+    """The address a lockout counts against (behind a trusted proxy, the client's: cyborg_site.client_address)."""
     return request.META.get("REMOTE_ADDR", "")
 
 

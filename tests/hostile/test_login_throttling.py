@@ -4,6 +4,8 @@ audited, shown in the admin and cleared there."""
 
 from __future__ import annotations
 
+import asyncio
+
 import pytest
 from axes.models import AccessAttempt
 from django.test import Client
@@ -101,11 +103,41 @@ def test_admins_see_and_clear_lockouts_in_the_admin(operator, admin_user):
     assert form_login("otto", PASSWORD).status_code == 302
 
 
-def test_behind_a_proxy_the_forwarded_address_counts(operator, settings):
-    settings.CLIENT_IP_FROM_X_FORWARDED_FOR = True
-    proxy = "127.0.0.1"
-    for _ in range(LIMIT):
-        Client(REMOTE_ADDR=proxy, HTTP_X_FORWARDED_FOR="1.2.3.4, 10.1.1.1").post(
-            "/accounts/login/", {"username": "nobody", "password": "x"})
-    other = Client(REMOTE_ADDR=proxy, HTTP_X_FORWARDED_FOR="10.2.2.2")
-    assert other.post("/accounts/login/", {"username": "otto", "password": PASSWORD}).status_code == 302
+async def _asgi_login(peer: str, forwarded: str, username: str, password: str) -> int:
+    """A form login through the whole ASGI application, from ``peer``, with that X-Forwarded-For."""
+    from asgiref.testing import ApplicationCommunicator
+
+    from cyborg_site.asgi import application
+
+    csrf = "c" * 32  # a CSRF secret of our own, as cookie and field
+    body = f"username={username}&password={password}&csrfmiddlewaretoken={csrf}".encode()
+    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/x-www-form-urlencoded"),
+               (b"cookie", f"csrftoken={csrf}".encode()),
+               (b"content-length", str(len(body)).encode()), (b"x-forwarded-for", forwarded.encode())]
+    app = ApplicationCommunicator(application, {
+        "type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": "POST", "scheme": "http",
+        "path": "/accounts/login/", "raw_path": b"/accounts/login/", "query_string": b"", "headers": headers,
+        "client": (peer, 50000), "server": ("127.0.0.1", 8000)})
+    await app.send_input({"type": "http.request", "body": body, "more_body": False})
+    start = await app.receive_output(timeout=10)
+    while (await app.receive_output(timeout=10)).get("more_body"):
+        pass
+    return start["status"]
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_only_a_trusted_proxy_names_the_client(operator, settings):
+    """Failures through the proxy count against the address it added (forged ones before it are
+    ignored); a client that is not the proxy cannot name an address at all."""
+    settings.TRUSTED_PROXIES = ["127.0.0.1/32"]
+    for n in range(LIMIT):  # rotating forged addresses, all from one real client
+        await _asgi_login("127.0.0.1", f"1.2.3.{n}, 10.1.1.1", "nobody", "x")
+    assert await _asgi_login("127.0.0.1", "6.6.6.6, 10.1.1.1", "otto", PASSWORD) == 429
+    assert await _asgi_login("127.0.0.1", "10.2.2.2", "otto", PASSWORD) == 302  # another client of the proxy
+    from axes.models import AccessAttempt
+
+    counted = await asyncio.to_thread(lambda: set(AccessAttempt.objects.values_list("ip_address", flat=True)))
+    assert counted <= {"10.1.1.1", "10.2.2.2"}
+    for n in range(LIMIT):  # not the proxy: its header is ignored, its own address counts
+        await _asgi_login("10.9.9.9", f"10.3.3.{n}", "nobody", "x")
+    assert await _asgi_login("10.9.9.9", "10.4.4.4", "otto", PASSWORD) == 429
