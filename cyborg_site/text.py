@@ -1,9 +1,12 @@
 """The one text policy, for everything a person or the robot sends.
 
 Input (``text_problem``/``clean_text``): valid Unicode scalar values only (no lone surrogates),
-no control or bidirectional-override characters except newline and tab, a length limit per
-field. Output (``scrub``/``scrub_json``): whatever is already stored or arrives from the robot
-is made safe to encode (U+FFFD for a lone surrogate), so no reader ever fails on it.
+nothing invisible or unassigned (controls but newline and tab, format characters such as the
+bidirectional overrides, zero-width joiners and tag characters, line and paragraph separators,
+private-use characters, unassigned code points and noncharacters), a length limit per field:
+what reaches the robot's speech is what a person can see in the field. Output
+(``scrub``/``scrub_json``): whatever is already stored or arrives from the robot is made safe to
+encode (U+FFFD for a lone surrogate), so no reader ever fails on it.
 """
 
 from __future__ import annotations
@@ -15,10 +18,21 @@ from typing import Any
 
 REPLACEMENT = "\ufffd"
 _SURROGATE = re.compile("[\ud800-\udfff]")
-# Cc (C0/C1 controls but newline and tab), and the bidirectional overrides and isolates that
-# make text display in another order than it is stored.
 _ALLOWED_CONTROLS = frozenset("\n\t")
+# The bidirectional overrides and isolates, which make text display in another order than it is stored.
 _BIDI_CONTROLS = frozenset("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+# Unicode general categories refused, with what to call them. An emoji joined with U+200D (a family,
+# a profession) and a subdivision flag (tag characters) are refused with them: the joiner and the tags
+# pass invisibly into the robot's speech. Cn is as of this Python's Unicode version.
+_REFUSED_CATEGORIES = {
+    "Cc": "a control character",
+    "Cf": "an invisible formatting character",
+    "Zl": "a line separator",
+    "Zp": "a paragraph separator",
+    "Co": "a private-use character",
+    "Cn": "an unassigned code point or noncharacter",
+}
+ALLOWED = "letters, marks, digits, punctuation, symbols (emoji too)"
 
 
 EMPTY = "must not be empty."
@@ -38,10 +52,12 @@ def text_problem(value: str, *, limit: int, multiline: bool = False) -> str | No
     if _SURROGATE.search(value):
         return "contains an invalid character (a lone UTF-16 surrogate)."
     for char in value:
-        if char in _BIDI_CONTROLS:
-            return f"contains a text-direction control character (U+{ord(char):04X})."
-        if unicodedata.category(char) == "Cc" and not (multiline and char in _ALLOWED_CONTROLS):
-            return f"contains a control character (U+{ord(char):04X})."
+        refused = "a text-direction control character" if char in _BIDI_CONTROLS \
+            else _REFUSED_CATEGORIES.get(unicodedata.category(char))
+        if refused and not (multiline and char in _ALLOWED_CONTROLS):
+            name = unicodedata.name(char, "")
+            allowed = f"{ALLOWED}, spaces, newlines and tabs" if multiline else f"{ALLOWED} and spaces"
+            return f"contains {refused} (U+{ord(char):04X}{' ' + name if name else ''}): only {allowed} are accepted."
     return None
 
 

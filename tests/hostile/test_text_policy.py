@@ -3,6 +3,8 @@ the robot; what the robot (or an old row) holds is rendered with U+FFFD, never a
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from django.db import connection
 
@@ -23,13 +25,56 @@ def test_it_accepts_ordinary_text_newlines_tabs_and_emoji():
     ("a\x00b", "control character (U+0000)"),
     ("a\x1bb", "control character (U+001B)"),
     ("a\x85b", "control character (U+0085)"),
-    ("abc\u202eevil", "text-direction control character (U+202E)"),
+    ("abc\u202eevil", "text-direction control character (U+202E RIGHT-TO-LEFT OVERRIDE)"),
     ("x" * 11, "at most 10 characters (got 11)"),
 ])
 def test_it_refuses_text_against_the_policy_naming_the_reason(value, reason):
     with pytest.raises(TextRejected) as caught:
         clean_text(value, field="text", limit=10)
     assert caught.value.field == "text" and reason in caught.value.reason
+
+
+# Invisible or unassigned: they would pass into the robot's speech unseen in the field.
+INVISIBLE = [
+    ("\u2028", "line separator (U+2028 LINE SEPARATOR)"),
+    ("\u2029", "paragraph separator (U+2029 PARAGRAPH SEPARATOR)"),
+    ("\u200d", "invisible formatting character (U+200D ZERO WIDTH JOINER)"),
+    ("\u200b", "invisible formatting character (U+200B ZERO WIDTH SPACE)"),
+    ("\ufeff", "invisible formatting character (U+FEFF ZERO WIDTH NO-BREAK SPACE)"),
+    ("\U000e0067", "invisible formatting character (U+E0067 TAG LATIN SMALL LETTER G)"),
+    ("\U000e007f", "invisible formatting character (U+E007F CANCEL TAG)"),
+    ("\uffff", "unassigned code point or noncharacter (U+FFFF)"),
+    ("\ufffe", "unassigned code point or noncharacter (U+FFFE)"),
+    ("\U0010ffff", "unassigned code point or noncharacter (U+10FFFF)"),
+    ("\ue000", "private-use character (U+E000)"),
+]
+
+
+@pytest.mark.parametrize(("char", "reason"), INVISIBLE)
+def test_it_refuses_invisible_and_unassigned_characters_naming_them(char, reason):
+    problem = text_problem(f"hello{char}there", limit=50, multiline=True)
+    assert problem is not None and reason in problem
+    assert problem.endswith("only letters, marks, digits, punctuation, symbols (emoji too), spaces, newlines and "
+                            "tabs are accepted.")
+
+
+def test_it_accepts_emoji_with_skin_tones_variation_selectors_and_flags_but_not_joined_ones():
+    assert text_problem("👍🏽 ❤️ 🇳🇴 1️⃣ naïve\u00a0text", limit=50) is None
+    assert "U+200D" in text_problem("👩\u200d🚀", limit=50)  # type: ignore[operator]
+    assert "U+E0067" in text_problem("🏴\U000e0067\U000e0062\U000e0065\U000e006e\U000e0067\U000e007f", limit=50)  # type: ignore[operator]
+
+
+@pytest.mark.django_db
+def test_it_refuses_invisible_characters_in_speech_through_the_api_and_never_sends_them(operator_api, robot):
+    for char, reason in INVISIBLE:
+        for ascii_only in (True, False):  # as JSON escapes and as UTF-8
+            body = json.dumps({"text": f"hello{char}there"}, ensure_ascii=ascii_only)
+            res = operator_api.post("/api/robot/speech/", body, content_type="application/json")
+            assert res.status_code == 400, (char, res.content)
+            data = res.json()
+            assert (data["code"], data["field"]) == ("invalid", "text"), data
+            assert data["detail"].startswith("text: contains ") and reason in data["detail"], data
+    assert only_the_marker_arrived(robot, operator_api), sent_to_robot(robot)
 
 
 def test_it_allows_newlines_only_in_multiline_fields():
