@@ -12,7 +12,7 @@ from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from daphne.http_protocol import HTTPFactory, WebRequest  # noqa: E402
 from daphne.ws_protocol import WebSocketProtocol  # noqa: E402
 
-from cyborg_site import direct_frames, reaping  # noqa: E402
+from cyborg_site import direct_frames, reaping, refused_handshakes  # noqa: E402
 from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
@@ -38,6 +38,8 @@ WebSocketProtocol.tcpNoDelay = True
 direct_frames.install()
 # Daphne forgets a finished request at once, not at its next once-a-second sweep (see the module).
 reaping.install()
+# A malformed Host or Origin is refused by autobahn with one warning line, not a CRITICAL traceback.
+refused_handshakes.install()
 # Twisted parses POSTed form bodies itself (Daphne never reads the result) and answers a body it
 # cannot parse with a bare, empty 400 before Django sees it; let Django give its usual error.
 WebRequest.__init__ = partialmethod(WebRequest.__init__, parsePOSTFormSubmission=False)
