@@ -66,7 +66,7 @@ def link_failover(topo: Topology, database_url: str) -> tuple[float, int, int]:
     time.sleep(4)  # the new holder's recorder flushes
     seqs = topo.recorded_seqs(database_url, "/odom")
     lost = sum(b - a - 1 for a, b in itertools.pairwise(seqs) if b > a)
-    counted = topo.health().get("history_lost_in_handovers", {}).get("/odom", -1)
+    counted = topo.health(details=True).get("history_lost_in_handovers", {}).get("/odom", -1)
     topo.script(f"restart {active}")
     return took, lost, counted
 

@@ -2,6 +2,10 @@
 
 A check returns a ``Check`` (or None when it does not apply to this wiring); add one by
 appending a function to ``CHECKS``. Any failing check makes /healthz answer 503.
+
+Anyone (a load balancer, a script polling) sees whether each check and the robot link are up
+(``public_report``); the addresses of the robot and the video server, the error texts and the
+link's details only a logged-in staff member or an admin's API token (``may_see_details``).
 """
 
 from __future__ import annotations
@@ -12,9 +16,13 @@ from typing import Any
 
 from django.conf import settings
 from django.db import connection
+from django.http import HttpRequest
+from rest_framework.exceptions import AuthenticationFailed
 
+from cyborg_site.roles import is_admin
 from history.recorder import WATERMARK_KEY, losses
 from robot.api.errors import UNAVAILABLE_TEXT, unavailable
+from robot.api.tokens import CachedTokenAuthentication
 from robot.live import redis_clients
 from robot.live.state import get_store, link_status
 from robot.supervisor import failing
@@ -105,3 +113,32 @@ def _handover_losses() -> dict[str, int]:
         if not unavailable(exc):
             raise
         return {}
+
+
+# Up or down, and nothing else: what anyone may see.
+PUBLIC_FIELDS = ("ok", "down", "connected", "link_running", "command_path", "detail", "code")
+
+
+def public_report(report: dict[str, Any]) -> dict[str, Any]:
+    """``report`` without addresses, error texts or the link's details: each check up or down."""
+    public = {name: report[name] for name in PUBLIC_FIELDS if name in report}
+    public["checks"] = {name: {"ok": check["ok"]} for name, check in report["checks"].items()}
+    return public
+
+
+def may_see_details(request: HttpRequest) -> bool:
+    """A logged-in staff member, or an admin's API token. Asks the database only when the request
+    carries a session or a token, and says no when the database that knows them is down."""
+    try:
+        if request.META.get("HTTP_AUTHORIZATION"):
+            found = CachedTokenAuthentication().authenticate(request)  # type: ignore[arg-type]
+            user = found[0] if found else None
+        else:
+            user = request.user
+        return bool(user is not None and user.is_active and (user.is_staff or is_admin(user)))
+    except AuthenticationFailed:
+        return False
+    except Exception as exc:
+        if not unavailable(exc):
+            raise
+        return False

@@ -145,7 +145,7 @@ def _recorded(topology: Topology) -> list[int]:
 
 
 def _history_lost(topology: Topology) -> int | None:
-    return topology.health().get("history_lost_in_handovers", {}).get(ODOM)
+    return topology.health(details=True).get("history_lost_in_handovers", {}).get(ODOM)
 
 
 def test_killing_the_active_link_promotes_the_standby_and_counts_the_history_lost(topology, dashboard):

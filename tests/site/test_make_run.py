@@ -70,13 +70,15 @@ def test_make_run_with_other_ports_connects_to_the_simulator_it_started():
                     pass
                 time.sleep(0.2)
             assert health.get("connected"), log.read_text()[-3000:]
-            assert health["robot_url"] == f"ws://127.0.0.1:{ports['SIM_PORT']}"
-            assert health["video_url"] == f"http://127.0.0.1:{ports['VIDEO_PORT']}"
             assert f"talks to ws://127.0.0.1:{ports['SIM_PORT']}" in log.read_text()
-            # The camera through the server comes from the simulator's video server, as the first admin sees it.
+            # The addresses in /healthz and the camera through the server, as the first admin sees them.
             password = re.search(r"Log in as\s+admin / (\S+)", log.read_text())
             assert password, log.read_text()[-3000:]
             opener = _logged_in(ports["PORT"], "admin", password[1])
+            with opener.open(f"http://127.0.0.1:{ports['PORT']}/healthz", timeout=10) as res:
+                health = json.loads(res.read())
+            assert health["robot_url"] == f"ws://127.0.0.1:{ports['SIM_PORT']}"
+            assert health["video_url"] == f"http://127.0.0.1:{ports['VIDEO_PORT']}"
             with opener.open(f"http://127.0.0.1:{ports['PORT']}/video/snapshot", timeout=10) as res:
                 assert res.headers["Content-Type"] == "image/jpeg"
                 assert res.read(3) == b"\xff\xd8\xff"
