@@ -79,6 +79,8 @@ MIDDLEWARE = [
     "django.contrib.auth.middleware.AuthenticationMiddleware",
     # An operator's signed E-STOP pass, for pressing it while the database is down.
     "robot.api.estop_access.EstopPassMiddleware",
+    # Who changed an account, a role, a token or a setting (dashboard.access_audit).
+    "dashboard.access_audit.ActorMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",
