@@ -11,6 +11,8 @@ class RobotConfig(AppConfig):
 
     def ready(self) -> None:
         checks.register(check_robot_settings)
+        import cyborg_site.checks  # noqa: F401  (the site's own: the secret key)
+
         # Wherever the link runs: the map renderer, the goal tracker, where the robot is,
         # the state machine graph and the diagnostics.
         from robot.introspection import tracking  # noqa: F401

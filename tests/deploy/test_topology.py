@@ -9,6 +9,7 @@ from __future__ import annotations
 import itertools
 import json
 import os
+import secrets
 import subprocess
 import threading
 import time
@@ -101,18 +102,24 @@ def _pids(topology: Topology) -> dict[str, int]:
     return pids
 
 
-def test_the_example_production_environment_passes_check_deploy(tmp_path: Path):
+def test_the_example_production_environment_passes_check_deploy_once_its_secret_key_is_set(tmp_path: Path):
     env = {k: v for k, v in os.environ.items() if not k.startswith(("DJANGO_", "PYTEST_"))}
     for line in (ROOT / "deploy" / "cyborg.env.example").read_text().splitlines():
         if "=" in line and not line.startswith("#"):
             name, value = line.split("=", 1)
             env[name] = value
     env["VAR_DIR"] = str(tmp_path)
+
+    def manage(*args: str, secret_key: str) -> subprocess.CompletedProcess:
+        return subprocess.run([PYTHON, "manage.py", *args], cwd=ROOT, env={**env, "SECRET_KEY": secret_key},
+                              capture_output=True, text=True, timeout=120)
+
     # As on the server (README, "Deploy"): hashed static files are collected before anything else runs.
-    subprocess.run([PYTHON, "manage.py", "collectstatic", "--noinput"], cwd=ROOT, env=env, check=True,
-                   capture_output=True, timeout=120)
-    out = subprocess.run([PYTHON, "manage.py", "check", "--deploy", "--fail-level", "WARNING"], cwd=ROOT, env=env,
-                         capture_output=True, text=True, timeout=120)
+    assert manage("collectstatic", "--noinput", secret_key=secrets.token_urlsafe(50)).returncode == 0
+    for check in (("check",), ("check", "--deploy")):
+        out = manage(*check, secret_key=env["SECRET_KEY"])  # the example's CHANGE-ME
+        assert out.returncode != 0 and "cyborg_site.E001" in out.stderr, out.stdout + out.stderr
+    out = manage("check", "--deploy", "--fail-level", "WARNING", secret_key=secrets.token_urlsafe(50))
     assert out.returncode == 0, out.stdout + out.stderr
     assert "System check identified no issues" in out.stdout
 
