@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
+from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.direct_frames import EXTENSION as FRAMES_EXTENSION
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.services_watch import ensure_watching
+from history.access import refusal, refused_topics
 from robot import interface as ri
 from robot.commands.reconnect import reconnect
-from robot.link.bus import RobotError, arequest
+from robot.link.bus import RobotError
 from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
 from robot.live.feed import alocal_hub, keeps_every_message
 from robot.live.frames import status_text, update_fragment
@@ -21,6 +24,11 @@ from robot.live.state import get_store
 from robot.live.topicwatch import TopicRefused, local_watches
 
 UNAUTHENTICATED = 4401
+
+
+def _topic_names(key: str) -> list[str]:
+    """The robot topics a watchable key shows (none for keys the server writes)."""
+    return [ri.topic(k).name for k in upstream_topics(key)]
 
 
 class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
@@ -75,19 +83,14 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
             await self.send_json({"kind": "error", "message": "watch needs a list of topic keys"})
             return
+        refused = set(await self._refused([t for k in keys if k in allowed for t in _topic_names(k)]))
+        allowed -= {k for k in keys if refused.intersection(_topic_names(k))}
         unknown = [k for k in keys if k not in allowed]
         if unknown:
             await self.send_json({"kind": "error", "message": f"Cannot watch: {', '.join(unknown)}"})
         new = [k for k in dict.fromkeys(keys) if k in allowed and k not in self.socket.keys]
-        needed = dict.fromkeys(t for key in new for t in upstream_topics(key))
-        for topic_key in needed:  # server-written keys need none; overlays need their robot topics
-            topic = ri.topic(topic_key)
-            if not topic.monitor:  # subscribed on first demand, once for every watcher
-                try:
-                    await arequest("subscribe", topic=topic.name, msg_type=topic.type, timeout=2)
-                except RobotError as exc:
-                    await self.send_json({"kind": "error", "message": exc.message})
-                    break  # one notice: the rest would fail the same way
+        if new:
+            await self._hold_upstream([*self.socket.keys, *new])
         await self._snapshot(new)
 
     async def _unwatch(self, keys: Any) -> None:
@@ -98,9 +101,22 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         for key in keys:
             if is_echo_key(key):
                 await local_watches().unwatch(self.socket, key.removeprefix(ECHO_PREFIX))
+        await self._hold_upstream(self.socket.keys)
+
+    async def _hold_upstream(self, keys: Iterable[str]) -> None:
+        """Hold at the link the robot topics these keys need that it does not always subscribe to
+        (server-written keys need none, a map overlay its sources); let go of the rest."""
+        needed = {t for key in keys if not is_echo_key(key) for t in upstream_topics(key) if not ri.topic(t).monitor}
+        try:
+            await local_watches().hold(self.socket, needed)
+        except RobotError as exc:
+            await self.send_json({"kind": "error", "message": exc.message})
 
     async def _watch_topic(self, name: Any) -> None:
         """Any topic of the robot's, by name (the topics page): summarised, at most a few times a second."""
+        if isinstance(name, str) and await self._refused([name]):
+            await self.send_json({"kind": "error", "code": "forbidden", "topic": name[:300], "message": refusal(name)})
+            return
         key = echo_key(name) if isinstance(name, str) else ""
         first = bool(key) and key not in self.socket.keys
         if first:  # listening before the link answers: it sends a latched topic's one message at once
@@ -123,6 +139,10 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             return
         self.hub.unwatch(self.socket, [echo_key(name)])
         await local_watches().unwatch(self.socket, name)
+
+    async def _refused(self, topics: list[str]) -> list[str]:
+        """Those of ``topics`` this socket's person may not watch (history.access)."""
+        return await database_sync_to_async(refused_topics)(self.scope["user"], topics) if topics else []
 
     async def _snapshot(self, keys: list[str]) -> None:
         """Watch ``keys`` and queue their stored values, never older than a live update already queued."""

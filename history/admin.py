@@ -58,11 +58,11 @@ def _set_mode(mode: str) -> Callable[[Any, HttpRequest, QuerySet[TopicPolicy]], 
 @admin.register(TopicPolicy)
 class TopicPolicyAdmin(admin.ModelAdmin):
     # Few, narrow columns: the list (with the filter beside it) fits a 1366 px screen.
-    list_display = ("topic_and_type", "mode", "interval_s", "retention_s")
+    list_display = ("topic_and_type", "mode", "interval_s", "retention_s", "sensitive")
     list_display_links = ("topic_and_type",)
-    list_editable = ("mode", "interval_s", "retention_s")
+    list_editable = ("mode", "interval_s", "retention_s", "sensitive")
     ordering = ("topic",)
-    list_filter = ("mode",)
+    list_filter = ("mode", "sensitive")
     search_fields = ("topic", "msg_type")
     actions = [_set_mode(m) for m in Mode.values]
     change_list_template = "history/admin_policy_changelist.html"

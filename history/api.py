@@ -10,7 +10,7 @@ from django.conf import settings
 from django.db import transaction
 from django.http import StreamingHttpResponse
 from drf_spectacular.utils import extend_schema
-from rest_framework import permissions
+from rest_framework import exceptions, permissions
 from rest_framework.decorators import api_view, permission_classes
 from rest_framework.negotiation import BaseContentNegotiation
 from rest_framework.parsers import BaseParser
@@ -21,6 +21,7 @@ from rest_framework.views import APIView
 
 from cyborg_site.roles import is_admin
 from history import serializers as s
+from history.access import refusal, refused_topics
 from history.downsample import series
 from history.export import EXPORTERS, FORMATS
 from history.models import RecordingSettings, TopicPolicy
@@ -36,6 +37,11 @@ class AdminWrites(permissions.BasePermission):
 
     def has_permission(self, request: Request, view: Any) -> bool:
         return request.method in permissions.SAFE_METHODS or is_admin(request.user)
+
+
+def _refuse_sensitive(request: Request, topic: str) -> None:
+    if refused_topics(request.user, [topic]):
+        raise exceptions.PermissionDenied(refusal(topic))
 
 
 def _policies() -> dict[str, Any]:
@@ -96,6 +102,7 @@ def samples_view(request: Request) -> Response:
     q = s.SeriesIn(data=request.query_params)
     q.is_valid(raise_exception=True)
     v = q.validated_data
+    _refuse_sensitive(request, v["topic"])
     result = series(topic=v["topic"], field=v["field"], start=v["start"], end=v["end"],
                     max_points=v.get("max_points") or settings.HISTORY_MAX_POINTS)
     return Response(vars(result))
@@ -124,6 +131,7 @@ class ExportView(APIView):
         q = s.ExportIn(data=request.query_params)
         q.is_valid(raise_exception=True)
         v = q.validated_data
+        _refuse_sensitive(request, v["topic"])
         content_type, ext = FORMATS[v["format"]]
         chunks = EXPORTERS[v["format"]](v["topic"], v["start"], v["end"])
         response = StreamingHttpResponse(_async_chunks(chunks), content_type=content_type)
@@ -154,6 +162,7 @@ def messages_view(request: Request) -> Response:
     q = s.MessagesIn(data=request.query_params)
     q.is_valid(raise_exception=True)
     v = q.validated_data
+    _refuse_sensitive(request, v["topic"])
     rows, truncated = recorded_messages(topic=v["topic"], start=v["start"], end=v["end"], limit=v["limit"])
     return Response({"topic": v["topic"], "messages": rows, "truncated": truncated})
 

@@ -45,6 +45,9 @@ class TopicPolicy(models.Model):
     max_message_bytes = models.PositiveIntegerField(
         null=True, blank=True, help_text="Larger messages are not stored; empty = the server's default."
     )
+    sensitive = models.BooleanField(
+        default=False, help_text="Operators only: refused to viewers on the topics page, in history and exports. "
+                                 "Sound (the microphone, the speaker) is always.")
     # Compare-and-set marker so concurrent samplers never store the same message twice.
     last_sampled_t = models.FloatField(default=0.0, editable=False)
     updated = models.DateTimeField(auto_now=True)

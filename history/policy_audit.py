@@ -10,7 +10,7 @@ from typing import Any
 from history.models import RecordingSettings, TopicPolicy
 from robot.commands.audit import audit_record
 
-POLICY_FIELDS = ("mode", "interval_s", "retention_s", "max_message_bytes")
+POLICY_FIELDS = ("mode", "interval_s", "retention_s", "max_message_bytes", "sensitive")
 
 
 def policies_now(topics: Iterable[str]) -> dict[str, dict[str, Any]]:

@@ -59,11 +59,11 @@ def _wav(res) -> wave.Wave_read:
 
 
 @pytest.mark.parametrize("rate, channels", [(16000, 1), (22050, 2)])
-def test_it_exports_recorded_audio_as_wav_in_the_recorded_format(viewer_api, rate, channels):
+def test_it_exports_recorded_audio_as_wav_in_the_recorded_format(operator_api, rate, channels):
     topic = "/history_test/mic"
     t0 = _record_tone(topic, rate=rate, channels=channels, seconds=1.0)
 
-    res = viewer_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
+    res = operator_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
 
     with _wav(res) as wav:
         assert (wav.getframerate(), wav.getnchannels(), wav.getsampwidth()) == (rate, channels, 2)
@@ -75,42 +75,42 @@ def test_it_exports_recorded_audio_as_wav_in_the_recorded_format(viewer_api, rat
     assert np.array_equal(np.frombuffer(frames, dtype="<i2"), expected[:len(frames) // 2])
 
 
-def test_it_exports_only_the_requested_range(viewer_api):
+def test_it_exports_only_the_requested_range(operator_api):
     topic = "/history_test/mic"
     t0 = _record_tone(topic, rate=16000, seconds=2.0)
 
-    res = viewer_api.get(EXPORT, {"topic": topic, "start": t0 + 0.5 - 0.001, "end": t0 + 1.5 - 0.001,
+    res = operator_api.get(EXPORT, {"topic": topic, "start": t0 + 0.5 - 0.001, "end": t0 + 1.5 - 0.001,
                                   "format": "wav"})
 
     with _wav(res) as wav:
         assert wav.getnframes() == 50 * 320
 
 
-def test_it_exports_speaker_audio_in_the_declared_speaker_format_without_a_recorded_info(viewer_api):
+def test_it_exports_speaker_audio_in_the_declared_speaker_format_without_a_recorded_info(operator_api):
     topic = ri.topic("speaker").name
     t0 = time.time() - 600
     write_rows([(topic, AUDIO, t0 + i * 0.02, json.dumps({"data": base64.b64encode(tone(440, i * 320, 320, 16000))
                                                                       .decode()})) for i in range(25)])
 
-    res = viewer_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
+    res = operator_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
 
     with _wav(res) as wav:
         assert (wav.getframerate(), wav.getnchannels(), wav.getnframes()) == (16000, 1, 25 * 320)
 
 
-def test_it_exports_an_empty_audio_range_as_a_valid_empty_wav(viewer_api):
+def test_it_exports_an_empty_audio_range_as_a_valid_empty_wav(operator_api):
     TopicPolicy.objects.create(topic=ri.topic("audio").name, msg_type=AUDIO, mode=Mode.EVERY)
 
-    res = viewer_api.get(EXPORT, {"topic": ri.topic("audio").name, "format": "wav"})
+    res = operator_api.get(EXPORT, {"topic": ri.topic("audio").name, "format": "wav"})
 
     with _wav(res) as wav:
         assert (wav.getframerate(), wav.getnchannels(), wav.getnframes()) == (16000, 1, 0)
 
 
-def test_it_refuses_wav_for_a_topic_that_is_not_audio(viewer_api):
+def test_it_refuses_wav_for_a_topic_that_is_not_audio(operator_api):
     write_rows([("/history_test/api", "std_msgs/String", time.time() - 60, json.dumps({"data": "hi"}))])
 
-    res = viewer_api.get(EXPORT, {"topic": "/history_test/api", "format": "wav"})
+    res = operator_api.get(EXPORT, {"topic": "/history_test/api", "format": "wav"})
 
     assert res.status_code == 400
     body = res.json()
@@ -118,11 +118,11 @@ def test_it_refuses_wav_for_a_topic_that_is_not_audio(viewer_api):
     assert "audio_common_msgs/AudioData" in body["detail"] and "std_msgs/String" in body["detail"]
 
 
-def test_it_refuses_wav_for_mp3_audio(viewer_api):
+def test_it_refuses_wav_for_mp3_audio(operator_api):
     topic = "/history_test/mic"
     t0 = _record_tone(topic, rate=16000, seconds=0.2, info=_info(coding="mp3"))
 
-    res = viewer_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
+    res = operator_api.get(EXPORT, {"topic": topic, "start": t0, "end": t0 + 60, "format": "wav"})
 
     assert res.status_code == 400
     assert res.json()["field"] == "format"
@@ -159,7 +159,7 @@ async def _settled(topic: str) -> None:
 
 @pytest.mark.django_db(transaction=True)
 async def test_it_records_the_microphone_only_under_a_policy_and_exports_it_as_wav(recording, sim, link,
-                                                                                   viewer_api):
+                                                                                   operator_api):
     mic = ri.topic("audio").name
     await sync_to_async(ensure_default_policies)()
     await async_wait_until(lambda: sim.subscription_count(ri.topic("battery_soc").name) > 0, timeout=10,
@@ -177,7 +177,7 @@ async def test_it_records_the_microphone_only_under_a_policy_and_exports_it_as_w
         Sample.objects.filter(topic=mic).order_by("received_at").values_list("received_at", flat=True)))()
 
     def export() -> tuple[int, int, int, bytes]:
-        with _wav(viewer_api.get(EXPORT, {"topic": mic, "format": "wav"})) as wav:
+        with _wav(operator_api.get(EXPORT, {"topic": mic, "format": "wav"})) as wav:
             return wav.getframerate(), wav.getnchannels(), wav.getnframes(), wav.readframes(wav.getnframes())
 
     rate, channels, nframes, frames = await sync_to_async(export)()
