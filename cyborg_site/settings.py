@@ -242,8 +242,8 @@ ROBOT_LINK_DIRECT_ADDRESSES = env_list("ROBOT_LINK_DIRECT_ADDRESSES", [])
 # stop short: inside the supervisor's kill timeout (scripts/stack.sh 10 s, systemd TimeoutStopSec 15 s).
 ROBOT_LINK_STOP_DEADLINE_S = env_float("ROBOT_LINK_STOP_DEADLINE_S", 8.0, minimum=0.01)
 ROBOT_REQUEST_TIMEOUT_S = env_float("ROBOT_REQUEST_TIMEOUT_S", 5.0, minimum=0.1)
-# Topics page: a topic nobody watches (and nobody records) keeps its upstream subscription this long
-# before the link lets go; a watched topic reaches pages at most this often (latest value wins).
+# A topic no page watches or shows (the topics page, a map overlay) and nobody records keeps its upstream
+# subscription this long before the link lets go; a watched topic reaches pages at most this often.
 TOPICS_IDLE_GRACE_S = env_float("TOPICS_IDLE_GRACE_S", 5.0, minimum=0)
 TOPICS_ECHO_MAX_HZ = env_float("TOPICS_ECHO_MAX_HZ", 20.0, minimum=0.5)
 # Values older than this are shown as stale (greyed) on the pages.

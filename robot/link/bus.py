@@ -162,7 +162,7 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
         except direct.Unreachable:
             pass  # no link listens there (an older one, or none yet): the usual way
     # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
-    if request["op"] not in ("reconnect", "subscribe", "topics_watch") and not await _is_online():
+    if request["op"] not in ("reconnect", "topics_watch") and not await _is_online():
         raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
     return await _via_layer(request)
 

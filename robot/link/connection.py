@@ -57,7 +57,7 @@ FIRST_CONNECT_S = 3.0
 # and a flapping link cannot carry an E-STOP.
 RECONNECT_INTERVAL_S = 5.0
 REPLY_MARGIN_S = 0.3
-_NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "subscribe", "estop_release"})  # answered at once
+_NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "estop_release"})  # answered at once
 # ROS 1 rosbridge answers a subscription it cannot make (a message package the robot lacks) only on
 # /rosout, as an error from its own node naming the request id roslibpy gave it.
 _ROSBRIDGE_NODE = "/rosbridge_websocket"
@@ -77,7 +77,7 @@ _operations: dict[str, Operation] = {}
 _start_hooks: list[Callable[[RobotLink], None]] = []
 _array_keys: set[str] = set()
 # Holders of upstream subscriptions: the registry's monitored topics, and a plain subscribe
-# ("subscribe" requests from pages: registry topics subscribed on first demand, kept).
+# (kept until unsubscribed, e.g. the navigation's own topics).
 REGISTRY_HOLDER = "registry"
 PINNED_HOLDER = "pinned"
 
@@ -522,9 +522,6 @@ class RobotLink:
                         "error": f"The robot link reconnected moments ago; try again in {max(1, round(wait))} s."}
             self._asked_reconnect_at = time.monotonic()
             self.reconnect()
-            return {"ok": True}
-        if op == "subscribe":
-            self.subscribe(request["topic"], request["msg_type"], holder=PINNED_HOLDER)
             return {"ok": True}
         if op == "ping":
             return {"ok": True}

@@ -5,6 +5,9 @@ set of watched topics, sent on every change and renewed every ``WATCH_RENEW_S``)
 renewed for ``WATCH_LEASE_S`` is gone (its web process died). The link holds the upstream
 subscription while any lease lives; when the last one goes it waits ``TOPICS_IDLE_GRACE_S`` and
 then lets go (the subscription stays if the registry, the recorder or anyone else still holds it).
+The same request also holds, by registry key, the robot topics the pages' live keys need that
+the link does not always subscribe to (a map overlay's laser, costmaps, transforms): held alike,
+never echoed.
 
 While a topic is watched every message is offered to a coalescer (at most ``TOPICS_ECHO_MAX_HZ``,
 latest value wins), summarised (``robot.live.summary``) and announced once under its echo key to
@@ -67,7 +70,8 @@ class Watches:
 
     def __init__(self, link: RobotLink) -> None:
         self.link = link
-        self.leases: dict[str, dict[str, float]] = {}  # topic -> holder -> expiry (monotonic)
+        self.leases: dict[str, dict[str, float]] = {}  # topic -> holder -> expiry (monotonic): echoed to pages
+        self.holds: dict[str, dict[str, float]] = {}  # the same for registry topics held for live keys
         self.idle_since: dict[str, float] = {}  # topic -> when its last lease went (the grace period runs)
         self.types: dict[str, str] = {}
         self.counters: dict[int, tuple[str, list[float]]] = {}  # rate measurements: id -> (topic, receive times)
@@ -83,13 +87,16 @@ class Watches:
 
     # --- leases ----------------------------------------------------------------------
 
-    async def sync(self, holder: str, topics: list[str]) -> dict[str, dict[str, str]]:
-        """``holder`` now watches exactly ``topics``; returns the ones refused: name -> {code, error}."""
+    async def sync(self, holder: str, topics: list[str], held: list[str] | None = None) -> dict[str, dict[str, str]]:
+        """``holder`` now watches exactly ``topics`` and holds exactly the registry topics with the keys
+        ``held``; returns the ones refused: name (or key) -> {code, error}."""
         wanted = list(dict.fromkeys(topics))
-        for name, leases in self.leases.items():
-            if name not in wanted:
-                leases.pop(holder, None)
         refused: dict[str, dict[str, str]] = {}
+        kept = self._registry_topics(held or [], refused)
+        for table, names in ((self.leases, wanted), (self.holds, kept)):
+            for name, leases in table.items():
+                if name not in names:
+                    leases.pop(holder, None)
         for name in wanted:
             try:
                 msg_type = await self.resolve(name)
@@ -101,13 +108,34 @@ class Watches:
                                                                "(operators; audited)"}
                 continue
             new = name not in self.leases
-            self.leases.setdefault(name, {})[holder] = time.monotonic() + WATCH_LEASE_S
-            self.idle_since.pop(name, None)
-            self.link.subscribe(name, msg_type, holder=HOLDER)
+            self._lease(self.leases, name, msg_type, holder)
             if new and name in self.last:
                 self.coalescer.offer(echo_key(name), settings.TOPICS_ECHO_MAX_HZ, self.last[name])
+        for name, msg_type in kept.items():
+            self._lease(self.holds, name, msg_type, holder)
         self.sweep()
         return refused
+
+    def _lease(self, table: dict[str, dict[str, float]], name: str, msg_type: str, holder: str) -> None:
+        table.setdefault(name, {})[holder] = time.monotonic() + WATCH_LEASE_S
+        self.idle_since.pop(name, None)
+        self.link.subscribe(name, msg_type, holder=HOLDER)
+
+    @staticmethod
+    def _registry_topics(keys: list[str], refused: dict[str, dict[str, str]]) -> dict[str, str]:
+        """The registry's topics with these keys (name -> type); the rest into ``refused``."""
+        found: dict[str, str] = {}
+        for key in keys:
+            try:
+                topic = ri.topic(key)
+            except KeyError:
+                refused[key] = {"code": "invalid", "error": f"no topic {key!r} in the registry"}
+                continue
+            if topic.type in ri.SOUND_TYPES:
+                refused[key] = {"code": "forbidden", "error": f"{topic.name} carries sound"}
+                continue
+            found[topic.name] = topic.type
+        return found
 
     async def resolve(self, name: str) -> str:
         """The topic's type from the robot (rosapi), cached; TopicRefused when it is no topic of the robot's."""
@@ -128,12 +156,14 @@ class Watches:
 
     def sweep(self) -> None:
         now = time.monotonic()
-        for name, leases in list(self.leases.items()):
-            for holder in [h for h, expiry in leases.items() if expiry <= now]:
-                del leases[holder]
-            if not leases:
-                del self.leases[name]
-                self.idle_since[name] = now
+        for table in (self.leases, self.holds):
+            for name, leases in list(table.items()):
+                for holder in [h for h, expiry in leases.items() if expiry <= now]:
+                    del leases[holder]
+                if not leases:
+                    del table[name]
+                    if name not in self.leases and name not in self.holds:
+                        self.idle_since[name] = now
         grace = settings.TOPICS_IDLE_GRACE_S
         for name, since in list(self.idle_since.items()):
             if now - since >= grace:
@@ -224,10 +254,10 @@ def _refusal(exc: TopicRefused) -> LinkReply:
 
 
 async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
-    topics = request.get("topics")
-    if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
-        return {"ok": False, "error_code": "invalid", "error": "topics_watch needs a list of topic names"}
-    refused = await watches_of(link).sync(str(request.get("holder") or ""), topics)
+    topics, held = request.get("topics"), request.get("held") or []
+    if not isinstance(topics, list) or not isinstance(held, list) or not all(isinstance(n, str) for n in topics + held):
+        return {"ok": False, "error_code": "invalid", "error": "topics_watch needs lists of topic names and keys"}
+    refused = await watches_of(link).sync(str(request.get("holder") or ""), topics, held)
     return {"ok": True, "refused": refused}
 
 

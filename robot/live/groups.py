@@ -84,7 +84,7 @@ class LinkRequest(TypedDict, total=False):
     request_id: str
     reply_to: str
     deadline: float  # epoch seconds; the link drops requests it gets too late
-    op: str  # publish | call_service | reconnect | subscribe
+    op: str  # publish | call_service | reconnect | topics_watch | ...
     key: str
     topic: str
     msg_type: str
@@ -101,6 +101,7 @@ class LinkRequest(TypedDict, total=False):
     on: bool
     holder: str  # topics_watch: which web process's leases
     topics: list[str]  # topics_watch: every topic that holder's pages watch
+    held: list[str]  # topics_watch: the registry topics (keys) that holder's pages' live keys need
     window_s: float  # topics_rate: how long to count messages
 
 

@@ -1,10 +1,12 @@
 """Which topics this web process's pages watch, held at the robot link by one lease per process.
 
 A page's socket opens a topic (``watch``) and closes it (``unwatch``, or by going away: ``drop``).
-The first socket of the process on a topic, and the last one leaving it, send the process's whole
-set to the link (``topics_watch``); a supervised loop renews it every ``WATCH_RENEW_S``, so a link
-that restarted (or took over) has every lease back within seconds and a dead web process's
-leases run out by themselves. Syncs go one at a time so the link sees them in order.
+The registry topics its live keys need (a map overlay's) it holds the same way (``hold``), only
+not echoed. The first socket of the process on a topic, and the last one leaving it, send the
+process's whole set to the link (``topics_watch``); a supervised loop renews it every
+``WATCH_RENEW_S``, so a link that restarted (or took over) has every lease back within seconds
+and a dead web process's leases run out by themselves. Syncs go one at a time so the link sees
+them in order.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import os
 import socket
 import uuid
 import weakref
+from collections.abc import Iterable
 from typing import Any
 
 from robot import interface as ri
@@ -31,6 +34,7 @@ class LocalWatches:
     def __init__(self) -> None:
         self.holder = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
         self.watchers: dict[str, set[Any]] = {}  # topic -> the sockets watching it
+        self.holding: dict[str, set[Any]] = {}  # registry topic key -> the sockets whose live keys need it
         self._lock = asyncio.Lock()
         self._renewing: asyncio.Task | None = None
 
@@ -60,11 +64,37 @@ class LocalWatches:
         if self._forget(watcher, name):
             await self._sync_quietly()
 
-    async def drop(self, watcher: Any) -> None:
-        """``watcher`` went away: let go of everything it watched."""
-        gone = [name for name in list(self.watchers) if self._forget(watcher, name)]
-        if gone:
+    async def hold(self, watcher: Any, keys: Iterable[str]) -> None:
+        """``watcher``'s live keys now need exactly the registry topics ``keys`` held at the link.
+        RobotError when the link cannot be told of a topic newly needed."""
+        wanted = set(keys)
+        before = set(self.holding)
+        for key in wanted:
+            self.holding.setdefault(key, set()).add(watcher)
+        for key in [k for k, watchers in self.holding.items() if k not in wanted and watcher in watchers]:
+            self._release(watcher, key)
+        if set(self.holding) - before:
+            self._ensure_renewing()
+            await self._sync()
+        elif set(self.holding) != before:
             await self._sync_quietly()
+
+    async def drop(self, watcher: Any) -> None:
+        """``watcher`` went away: let go of everything it watched and held."""
+        gone = [name for name in list(self.watchers) if self._forget(watcher, name)]
+        released = [key for key in list(self.holding) if self._release(watcher, key)]
+        if gone or released:
+            await self._sync_quietly()
+
+    def _release(self, watcher: Any, key: str) -> bool:
+        """True when ``watcher`` held ``key`` and was the last in this process to."""
+        watchers = self.holding.get(key)
+        if watchers is None or watcher not in watchers:
+            return False
+        watchers.discard(watcher)
+        if not watchers:
+            del self.holding[key]
+        return not watchers
 
     def _forget(self, watcher: Any, name: str) -> bool:
         """Remove one watcher; True when that was the topic's last one in this process."""
@@ -80,7 +110,7 @@ class LocalWatches:
     async def _sync(self) -> dict[str, dict[str, str]]:
         async with self._lock:
             reply = await arequest("topics_watch", holder=self.holder, topics=sorted(self.watchers),
-                                   timeout=SYNC_TIMEOUT_S)
+                                   held=sorted(self.holding), timeout=SYNC_TIMEOUT_S)
         return dict(reply.get("refused") or {})
 
     async def _sync_quietly(self) -> None:
@@ -94,9 +124,9 @@ class LocalWatches:
             self._renewing = supervise(f"topics.renew.{self.holder[-8:]}", self._renew_forever)
 
     async def _renew_forever(self) -> None:
-        while self.watchers:
+        while self.watchers or self.holding:
             await asyncio.sleep(WATCH_RENEW_S)
-            if self.watchers:
+            if self.watchers or self.holding:
                 await self._sync_quietly()
 
 

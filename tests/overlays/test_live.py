@@ -19,6 +19,7 @@ from robot.live.groups import (
     OVERLAY_PARTICLES_KEY,
     OVERLAY_SCAN_KEY,
 )
+from robot.live.keys import OVERLAY_SOURCES
 from robot.overlays.link import overlays
 from robot.sim.world import OCCUPIED
 from tests.helpers import async_wait_until, receive_until, ws_communicator
@@ -98,6 +99,35 @@ async def test_two_pages_share_one_subscription_and_unwatching_stops_the_frames(
     finally:
         for ws in pages:
             await ws.disconnect()
+
+
+async def test_overlay_subscriptions_go_upstream_once_the_last_page_lets_go(overlay_link, sim, viewer, operator,
+                                                                            settings):
+    settings.TOPICS_IDLE_GRACE_S = 0.3
+
+    def sources(*keys):  # what the link subscribes to only for pages that show these overlays
+        return {ri.topic(t).name for key in keys for t in OVERLAY_SOURCES[key] if not ri.topic(t).monitor}
+
+    def subscribed_exactly(names):
+        return lambda: all(sim.subscription_count(n) == (1 if n in names else 0) for n in everything)
+
+    shown = [OVERLAY_SCAN_KEY, OVERLAY_PARTICLES_KEY, OVERLAY_LOCAL_COSTMAP_KEY, OVERLAY_FOOTPRINT_KEY]
+    everything = sources(*shown, OVERLAY_LOCAL_PLAN_KEY)
+    first = await watching(viewer, shown)
+    second = await watching(operator, [OVERLAY_LOCAL_PLAN_KEY])
+    await async_wait_until(subscribed_exactly(everything), timeout=10, what="one subscription per source")
+    await first.send_json_to({"action": "unwatch", "keys": [OVERLAY_SCAN_KEY]})
+    await async_wait_until(subscribed_exactly(everything - {ri.topic("scan").name}), timeout=5, what="scan let go")
+    await first.disconnect()
+    # The other page's local plan still needs its path and the transforms, the footprint shared with it.
+    await async_wait_until(subscribed_exactly(sources(OVERLAY_LOCAL_PLAN_KEY)), timeout=5, what="the first page's")
+    await second.send_json_to({"action": "unwatch", "keys": [OVERLAY_LOCAL_PLAN_KEY]})
+    await async_wait_until(subscribed_exactly(set()), timeout=5, what="every overlay source let go")
+    assert sim.subscription_count(ri.topic("robot_pose").name) == 1  # the registry's own stay
+    await second.send_json_to({"action": "watch", "keys": [OVERLAY_PARTICLES_KEY]})  # and back on demand
+    await receive_until(second, update_of(OVERLAY_PARTICLES_KEY, lambda m: "poses" in m), timeout=10)
+    await second.disconnect()
+    await async_wait_until(subscribed_exactly(set()), timeout=5, what="let go when the page closed")
 
 
 async def fetch_tile(user, meta, row, col):
