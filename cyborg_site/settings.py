@@ -224,6 +224,9 @@ CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
 ROSBRIDGE_URL = env_str("ROSBRIDGE_URL", "ws://127.0.0.1:9090")
 VIDEO_URL = env_str("VIDEO_URL", "http://127.0.0.1:8080")
 VIDEO_TOPIC = env_str("VIDEO_TOPIC", "/videostream")
+# Camera streams one web process serves at once: per person, and in all.
+CAMERA_STREAMS_PER_PERSON = env_int("CAMERA_STREAMS_PER_PERSON", 3, minimum=1)
+CAMERA_STREAMS_TOTAL = env_int("CAMERA_STREAMS_TOTAL", 50, minimum=1)
 # Re-wiring: {"topics": {"cmd_vel": "/RosAria/cmd_vel"}, "services": {...}, "actions": {...}}
 _names = env_json_dict("ROBOT_NAME_OVERRIDES")
 ROBOT_TOPICS: dict[str, str] = _names.get("topics", {})

@@ -6,6 +6,9 @@ then connects again with whatever access the person has now, or goes to the logi
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -20,7 +23,10 @@ from django.dispatch import receiver
 from cyborg_site.roles import is_operator
 from robot.live.groups import person_group
 
+log = logging.getLogger(__name__)
+
 ACCESS_CHANGED = "access.changed"
+RETRY_S = 1.0
 FORBIDDEN = 4403  # the socket's close code: the person may no longer do this (the page reconnects)
 LOGGED_OUT = 4401
 
@@ -84,6 +90,37 @@ def still_allowed(scope: dict[str, Any], *, operator: bool, session_key: str) ->
     if operator and not is_operator(fresh):
         return FORBIDDEN
     return None
+
+
+async def end_when_revoked(scope: dict[str, Any], *, operator: bool, end: Callable[[], Any]) -> None:
+    """Until cancelled: hear the access changes of ``scope``'s person (as a socket does, through
+    the channel layer) and ``end`` what they opened once they may no longer have it (a stream)."""
+    layer = get_channel_layer()
+    user_id = getattr(scope.get("user"), "pk", None)
+    if layer is None or user_id is None:
+        return
+    group = person_group(user_id)
+    while True:
+        channel = ""
+        try:
+            channel = await layer.new_channel()
+            await layer.group_add(group, channel)
+            while True:
+                event = await layer.receive(channel)
+                if event.get("type") != ACCESS_CHANGED:
+                    continue
+                code = await database_sync_to_async(still_allowed)(scope, operator=operator,
+                                                                   session_key=event.get("session_key", ""))
+                if code is not None:
+                    end()
+                    return
+        except Exception:  # the channel layer (Redis) is away: listen again once it is back
+            log.warning("access changes of person %s unheard for now", user_id, exc_info=True)
+            await asyncio.sleep(RETRY_S)
+        finally:
+            if channel:
+                with contextlib.suppress(Exception):
+                    await asyncio.shield(layer.group_discard(group, channel))
 
 
 async def close_if_revoked(consumer: Any, event: dict[str, Any], *, operator: bool,

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import aiohttp
+from django.conf import settings
 
 log = logging.getLogger(__name__)
 
@@ -54,6 +55,7 @@ class Viewer:
     """A viewer's latest-value slot: ``None`` in ``frame`` after ``ended`` means the stream is over."""
 
     key: StreamKey
+    person: object = None
     frame: bytes | None = None
     ended: bool = False
     ready: asyncio.Event = field(default_factory=asyncio.Event)
@@ -132,6 +134,10 @@ MAX_UPSTREAMS = 4
 SIZE_PARAMS = ("width", "height", "quality")
 
 
+class TooManyStreams(Exception):
+    pass
+
+
 class VideoRelay:
     """The upstream streams of one event loop, keyed by their parameters."""
 
@@ -139,15 +145,25 @@ class VideoRelay:
         self.upstreams: dict[StreamKey, Upstream] = {}
         self.max_upstreams = max_upstreams
 
-    async def join(self, base_url: str, params: dict[str, Any]) -> Viewer:
-        """Join (or open) the upstream for ``params``; UpstreamError when the video server is down."""
+    def viewers(self, person: object = None) -> int:
+        return sum(1 for upstream in self.upstreams.values() for viewer in upstream.viewers
+                   if person is None or viewer.person == person)
+
+    async def join(self, base_url: str, params: dict[str, Any], *, person: object = None) -> Viewer:
+        """Join (or open) the upstream for ``params``; UpstreamError when the video server is down,
+        TooManyStreams past ``CAMERA_STREAMS_PER_PERSON`` or ``CAMERA_STREAMS_TOTAL`` in this process."""
+        if self.viewers() >= settings.CAMERA_STREAMS_TOTAL:
+            raise TooManyStreams(f"this server already streams the camera {settings.CAMERA_STREAMS_TOTAL} times")
+        if person is not None and self.viewers(person) >= settings.CAMERA_STREAMS_PER_PERSON:
+            raise TooManyStreams(f"you already watch the camera {settings.CAMERA_STREAMS_PER_PERSON} times: "
+                                 "close a page or tab that shows it")
         key: StreamKey = tuple(sorted((k, str(v)) for k, v in params.items()))
         if key not in self.upstreams and len(self.upstreams) >= self.max_upstreams:
             key = tuple((k, v) for k, v in key if k not in SIZE_PARAMS)
         upstream = self.upstreams.get(key)
         if upstream is None or upstream.task.done():
             upstream = self.upstreams[key] = Upstream(base_url, key)
-        viewer = Viewer(key)
+        viewer = Viewer(key, person)
         upstream.viewers.add(viewer)
         try:
             await asyncio.shield(upstream.opened)

@@ -8,18 +8,32 @@ client goes away Django cancels it and the viewer leaves the relay.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import weakref
 from collections.abc import AsyncIterator
+from typing import Any
 
 from django.conf import settings
 from django.http import HttpRequest, HttpResponse, HttpResponseBase, StreamingHttpResponse
+from django.utils.html import escape
 
-from dashboard.videorelay import CONTENT_TYPE, UpstreamError, VideoRelay, Viewer, fetch_snapshot, get_relay
+from dashboard.revocation import end_when_revoked
+from dashboard.videorelay import (
+    CONTENT_TYPE,
+    TooManyStreams,
+    UpstreamError,
+    VideoRelay,
+    Viewer,
+    fetch_snapshot,
+    get_relay,
+)
 
 log = logging.getLogger(__name__)
 
-_SIZE_PARAMS = {"width": (16, 1920), "height": (16, 1080), "quality": (1, 100)}
+# Sizes and qualities a page may ask for: any other is snapped to the nearest of these (each
+# distinct one would cost the robot an encoder).
+SIZES = {"width": (320, 640, 1280), "height": (240, 480, 720), "quality": (30, 50, 80)}
 
 PLACEHOLDER_SVG = (
     '<svg xmlns="http://www.w3.org/2000/svg" width="640" height="480" viewBox="0 0 640 480">'
@@ -30,37 +44,45 @@ PLACEHOLDER_SVG = (
 
 def _params(request: HttpRequest, **fixed: str) -> dict[str, str | int]:
     params: dict[str, str | int] = {"topic": settings.VIDEO_TOPIC, **fixed}
-    for name, (low, high) in _SIZE_PARAMS.items():
+    for name, sizes in SIZES.items():
         raw = request.GET.get(name, "")
-        if raw.isdigit():
-            params[name] = max(low, min(high, int(raw)))
+        if raw.isdigit() and len(raw) < 6:
+            params[name] = min(sizes, key=lambda size: abs(size - int(raw)))
     return params
 
 
-def _unavailable(reason: str) -> HttpResponse:
+def _unavailable(reason: str, status: int = 503, text: str = "Camera unavailable") -> HttpResponse:
     log.info("camera unavailable: %s", reason)
-    response = HttpResponse(PLACEHOLDER_SVG, status=503, content_type="image/svg+xml")
+    response = HttpResponse(PLACEHOLDER_SVG.replace("Camera unavailable", escape(text)), status=status,
+                            content_type="image/svg+xml")
     response["Retry-After"] = "3"
     response["Cache-Control"] = "no-store"
     return response
 
 
-async def _frames(relay: VideoRelay, viewer: Viewer) -> AsyncIterator[bytes]:
+async def _frames(relay: VideoRelay, viewer: Viewer, person: dict[str, Any]) -> AsyncIterator[bytes]:
+    # The person's access changes (a logout, a deactivation, a new password): their streams end.
+    revoked = asyncio.ensure_future(end_when_revoked(person, operator=False, end=viewer.end))
     try:
         while (part := await viewer.next()) is not None:
             yield part
     finally:
+        revoked.cancel()
         relay.leave(viewer)
 
 
 async def video_stream(request: HttpRequest) -> HttpResponseBase:
-    """MJPEG (multipart/x-mixed-replace) from the robot's camera; 503 + placeholder when it is down."""
+    """MJPEG (multipart/x-mixed-replace) from the robot's camera; 503 + placeholder when it is down,
+    429 past a person's or the server's number of streams."""
     relay = get_relay()
+    user = await request.auser()
     try:
-        viewer = await relay.join(settings.VIDEO_URL, _params(request, type="mjpeg"))
+        viewer = await relay.join(settings.VIDEO_URL, _params(request, type="mjpeg"), person=user.pk)
+    except TooManyStreams as exc:
+        return _unavailable(str(exc), 429, "Too many camera streams")
     except UpstreamError as exc:
         return _unavailable(str(exc))
-    frames = _frames(relay, viewer)
+    frames = _frames(relay, viewer, {"user": user, "session": request.session})
     # A client gone before the body started never runs the generator's finally.
     weakref.finalize(frames, relay.leave, viewer)
     response = StreamingHttpResponse(frames, content_type=CONTENT_TYPE)

@@ -133,21 +133,67 @@ async def test_many_viewers_share_one_upstream_stream_closed_after_the_last_leav
     await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="the upstream stream closed")
 
 
-async def test_a_viewer_asking_for_many_sizes_opens_a_bounded_number_of_streams_on_the_robot(video, viewer):
+async def test_sizes_are_snapped_to_a_short_list_so_many_sizes_open_few_streams_on_the_robot(video, viewer,
+                                                                                              settings):
     """30 distinct widths once opened 30 MJPEG streams on the robot's video server."""
-    from dashboard.videorelay import MAX_UPSTREAMS
-
+    settings.CAMERA_STREAMS_PER_PERSON = 100
     cookie = await asyncio.to_thread(session_cookie, viewer)
     apps = []
-    for width in range(100, 400, 10):
-        app, _ = await open_stream_with_query("/video/stream", cookie, f"width={width}".encode())
+    for width in range(100, 2000, 63):  # 31 widths
+        app, _ = await open_stream_with_query("/video/stream", cookie, f"width={width}&quality={width % 97}".encode())
         await read_frames(app, 1)
         apps.append(app)
-    assert upstream_streams(video) == MAX_UPSTREAMS + 1  # the first few sizes, then the camera's own
+    from dashboard.videorelay import MAX_UPSTREAMS, get_relay
+
+    assert upstream_streams(video) <= MAX_UPSTREAMS + 1  # a few sizes, then the camera's own
+    sizes = [dict(key) for key in get_relay().upstreams]
+    assert {s["width"] for s in sizes if "width" in s} <= {"320", "640", "1280"}
+    assert {s["quality"] for s in sizes if "quality" in s} <= {"30", "50", "80"}
     for app in apps:
         await app.send_input({"type": "http.disconnect"})
         await app.wait(timeout=5)
     await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="every upstream stream closed")
+
+
+async def test_streams_are_capped_per_person_and_in_all(video, viewer, operator, settings):
+    settings.CAMERA_STREAMS_PER_PERSON, settings.CAMERA_STREAMS_TOTAL = 2, 3
+    mine, theirs = [await asyncio.to_thread(session_cookie, user) for user in (viewer, operator)]
+    apps = [(await open_stream("/video/stream", mine))[0] for _ in range(2)]
+    refused, start = await open_stream("/video/stream", mine)
+    assert start["status"] == 429
+    body = (await refused.receive_output(timeout=5))["body"]
+    assert b"Too many camera streams" in body
+    app, start = await open_stream("/video/stream", theirs)  # someone else still may
+    assert start["status"] == 200
+    apps.append(app)
+    _, start = await open_stream("/video/stream", theirs)  # but not past the server's number
+    assert start["status"] == 429
+    for app in apps:
+        await app.send_input({"type": "http.disconnect"})
+        await app.wait(timeout=5)
+
+
+@pytest.mark.parametrize("change", ["deactivated", "logged out"])
+async def test_a_persons_streams_end_within_a_second_of_their_access_ending(video, viewer, change):
+    client = Client()
+    await asyncio.to_thread(client.force_login, viewer)
+    cookie = f"sessionid={client.cookies['sessionid'].value}".encode()
+    app, start = await open_stream("/video/stream", cookie)
+    assert start["status"] == 200
+    await read_frames(app, 1)
+
+    def revoke() -> None:
+        if change == "deactivated":
+            viewer.is_active = False
+            viewer.save()
+        else:
+            client.post("/accounts/logout/")
+
+    await asyncio.to_thread(revoke)
+    async with asyncio.timeout(1.0):
+        while (await app.receive_output(timeout=1)).get("more_body"):
+            pass
+    await async_wait_until(lambda: upstream_streams(video) == 0, timeout=5, what="the upstream stream closed")
 
 
 async def open_stream_with_query(path: str, cookie: bytes, query: bytes) -> tuple[ApplicationCommunicator, dict]:
