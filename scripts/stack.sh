@@ -164,7 +164,7 @@ write_nginx() {
       -e '/listen \[::\]/d' \
       -e "s|https://\$host\$request_uri|https://\$host:$HTTPS_PORT\$request_uri|" \
       -e "s|/etc/ssl/cyborg/|$STACK_DIR/tls/|" \
-      -e "s|/srv/cyborg/var/staticfiles/|$STACK_DIR/var/staticfiles/|" \
+      -e "s|/srv/cyborg/staticfiles/|$STACK_DIR/var/staticfiles/|" \
       -e "s|server 127.0.0.1:8001 |server 127.0.0.1:$WEB_A |" \
       -e "s|server 127.0.0.1:8002 |server 127.0.0.1:$WEB_B |" \
       deploy/nginx/cyborg.conf >"$conf/site.conf"
