@@ -158,11 +158,14 @@ write_nginx() {
   openssl req -x509 -newkey rsa:2048 -nodes -days 7 -subj "/CN=localhost" \
     -addext "subjectAltName=DNS:localhost,IP:127.0.0.1" \
     -keyout "$STACK_DIR/tls/privkey.pem" -out "$STACK_DIR/tls/fullchain.pem" 2>/dev/null
-  # The shipped site, with local ports and paths (IPv6 listeners dropped: loopback only).
+  # The shipped site, with local ports, name and paths (IPv6 listeners dropped: loopback only), and
+  # HSTS as short as the environment's (a browser keeps it for localhost whatever the port).
   sed -e "s|listen 80;|listen 127.0.0.1:$HTTP_PORT;|" \
       -e "s|listen 443 ssl http2;|listen 127.0.0.1:$HTTPS_PORT ssl http2;|" \
       -e '/listen \[::\]/d' \
-      -e "s|https://\$host\$request_uri|https://\$host:$HTTPS_PORT\$request_uri|" \
+      -e "s|server_name cyborg.example.org;|server_name localhost;|" \
+      -e "s|https://\$server_name\$request_uri|https://\$server_name:$HTTPS_PORT\$request_uri|" \
+      -e '/Strict-Transport-Security/s|max-age=[0-9]*|max-age=60|' \
       -e "s|/etc/ssl/cyborg/|$STACK_DIR/tls/|" \
       -e "s|/srv/cyborg/staticfiles/|$STACK_DIR/var/staticfiles/|" \
       -e "s|server 127.0.0.1:8001 |server 127.0.0.1:$WEB_A |" \
