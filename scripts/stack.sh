@@ -41,10 +41,12 @@ wait_port() {  # port seconds name
   done
 }
 
-# The example production environment, with this machine's services, ports and paths.
+# The example production environment, with this machine's services, ports and paths; only its owner
+# may read it (the secret key, the database's password).
 write_env() {
   local key
   key=$("$BIN/python" -c "import secrets; print(secrets.token_urlsafe(50))")
+  install -m 600 /dev/null "$ENV_FILE"
   {
     grep -v -E '^(SECRET_KEY|ALLOWED_HOSTS|CSRF_TRUSTED_ORIGINS|VAR_DIR|DATABASE_URL|REDIS_URL|CHANNEL_LAYER_PREFIX|ROSBRIDGE_URL|VIDEO_URL|ROBOT_LINK_DIRECT_ADDRESSES|SECURE_HSTS_SECONDS)=' \
       deploy/cyborg.env.example
@@ -201,6 +203,8 @@ up() {
   mkdir -p "$PIDS" "$LOGS" "$STACK_DIR/var"
   write_env
   create_database
+  # It gets the first admin's password (bootstrap).
+  touch "$LOGS/setup.log" && chmod 600 "$LOGS/setup.log"
   # Static files first: with hashed names every page (and start-up code rendering one) needs the manifest.
   in_env "$BIN/python" manage.py collectstatic --noinput >>"$LOGS/setup.log"
   in_env "$BIN/python" manage.py migrate --noinput >>"$LOGS/setup.log"

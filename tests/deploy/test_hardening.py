@@ -1,11 +1,14 @@
-"""The shipped nginx site, on the production topology: what it says about itself, its TLS suites, its
-headers on static files, its :80 redirect and its request limits."""
+"""The shipped nginx site and scripts/stack.sh's files, on the production topology: what nginx says
+about itself, its TLS suites, its headers on static files, its :80 redirect, its request limits, and
+which of the stack's files only their owner may read."""
 
 from __future__ import annotations
 
 import http.client
 import json
+import os
 import re
+import stat
 import subprocess
 from email.message import Message
 from typing import NamedTuple
@@ -146,3 +149,10 @@ def test_tls_1_2_takes_only_forward_secret_aead_suites(topology):
         assert out.returncode != 0 and "handshake failure" in out.stderr, (suite, out.stdout[-500:], out.stderr)
     assert _handshake(topology, "-tls1_3").returncode == 0
 
+
+def test_the_secrets_the_stack_writes_only_their_owner_may_read(topology):
+    setup_log = topology.dir / "logs" / "setup.log"
+    assert "Created the first admin" in setup_log.read_text()
+    for path in (topology.dir / "cyborg.env", setup_log, topology.dir / "tls" / "privkey.pem"):
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+        assert mode == 0o600, f"{path} is {mode:o}"
