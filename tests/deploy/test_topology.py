@@ -14,6 +14,7 @@ import subprocess
 import threading
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 from pathlib import Path
 
@@ -321,3 +322,82 @@ def test_a_process_that_dies_is_started_again_like_the_units_do(topology):
                   timeout=10, what="the worker started again")
     assert topology.alive("worker")
     assert "exited; starting it again" in topology.log("worker")
+
+
+def _login_cookie(topology: Topology, username: str) -> str:
+    """Log in through nginx like a browser; the Cookie header."""
+    import http.cookiejar
+    import re
+
+    jar = http.cookiejar.CookieJar()
+    opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar),
+                                         urllib.request.HTTPSHandler(context=_TLS))
+    page = opener.open(f"{topology.url}/accounts/login/", timeout=10).read().decode()
+    csrf = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)  # type: ignore[union-attr]
+    form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": csrf})
+    opener.open(urllib.request.Request(f"{topology.url}/accounts/login/", data=form.encode(),
+                                       headers={"Referer": f"{topology.url}/accounts/login/"}), timeout=10).read()
+    return "; ".join(f"{c.name}={c.value}" for c in jar)
+
+
+def test_taking_an_operators_role_closes_their_sockets_in_both_web_processes_within_a_second(topology):
+    """Drive socket on one web process, audio socket on the other, a token trusted by both: the
+    role is taken away by another process (manage.py), and each hears it through the channel layer."""
+    import asyncio
+
+    from websockets.asyncio.client import connect
+    from websockets.exceptions import ConnectionClosed
+
+    cookie = _login_cookie(topology, "otto")
+    token = topology.token("otto")
+    for web in (0, 1):  # each web process now trusts the token from its cache
+        assert topology.fetch("/api/robot/state/", web=web, user="otto")[0] == 200
+    cmd_vel = ri.topic("cmd_vel").name
+
+    async def scenario() -> tuple[list[int | None], float]:
+        headers = {"Cookie": cookie, "X-Forwarded-Proto": "https"}
+        origin = f"https://localhost:{topology.https_port}"
+        drive = await connect(f"ws://127.0.0.1:{topology.web_ports[0]}/ws/teleop/", origin=origin,
+                              additional_headers=headers)
+        audio = await connect(f"ws://127.0.0.1:{topology.web_ports[1]}/ws/audio/", origin=origin,
+                              additional_headers=headers)
+        await drive.recv()  # the lock frame
+        before = len(await asyncio.to_thread(topology.received, cmd_vel))
+        await drive.send(json.dumps({"type": "input", "linear": 0.3, "angular": 0.0}))
+        while not any(m["linear"]["x"] > 0 for m in (await asyncio.to_thread(topology.received, cmd_vel))[before:]):
+            await asyncio.sleep(0.05)
+        await asyncio.to_thread(topology.manage, "shell", "-c",
+                                "from django.contrib.auth.models import Group, User\n"
+                                "User.objects.get(username='otto').groups.set([Group.objects.get(name='viewer')])")
+        demoted = time.monotonic()
+        codes = []
+        for socket in (drive, audio):
+            try:
+                async with asyncio.timeout(1.0):
+                    async for _ in socket:
+                        pass
+            except (TimeoutError, ConnectionClosed):
+                pass
+            codes.append(socket.close_code)
+        return codes, demoted
+
+    try:
+        codes, demoted = asyncio.run(scenario())
+        assert codes == [4403, 4403], codes
+        stopped = topology.received(cmd_vel)[-1]
+        assert stopped["linear"]["x"] == 0 and stopped["angular"]["z"] == 0
+        # The token: refused by both processes within a second of the change (it is a viewer's now).
+        while time.monotonic() - demoted < 1.0:
+            time.sleep(0.05)
+        for web in (0, 1):
+            status, _ = topology.fetch("/api/robot/speech/", web=web, method="POST", body={"text": "hi"}, user="otto")
+            assert status == 403, (web, status)
+        topology.manage("shell", "-c", f"from rest_framework.authtoken.models import Token\n"
+                        f"Token.objects.filter(key={token!r}).delete()")
+        time.sleep(0.6)
+        for web in (0, 1):
+            assert topology.fetch("/api/robot/state/", web=web, user="otto")[0] == 401
+    finally:
+        topology.tokens.pop("otto", None)
+        topology.manage("shell", "-c", "from django.contrib.auth.models import Group, User\n"
+                        "User.objects.get(username='otto').groups.set([Group.objects.get(name='operator')])")
