@@ -72,6 +72,7 @@ INSTALLED_APPS = [
 
 MIDDLEWARE = [
     "django.middleware.security.SecurityMiddleware",
+    "cyborg_site.csp.ContentSecurityPolicyMiddleware",
     "whitenoise.middleware.WhiteNoiseMiddleware",
     "django.contrib.sessions.middleware.SessionMiddleware",
     "django.middleware.common.CommonMiddleware",
@@ -81,6 +82,8 @@ MIDDLEWARE = [
     "robot.api.estop_access.EstopPassMiddleware",
     # Who changed an account, a role, a token or a setting (dashboard.access_audit).
     "dashboard.access_audit.ActorMiddleware",
+    # The browser an account logged in from, let in while that account is flooded (dashboard.login_flood).
+    "dashboard.login_flood.DeviceCookieMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",
@@ -139,6 +142,7 @@ AUTH_PASSWORD_VALIDATORS = [
 ]
 AUTHENTICATION_BACKENDS = [
     "axes.backends.AxesStandaloneBackend",  # refuses locked-out accounts and addresses first
+    "dashboard.login_flood.FloodGuardBackend",  # then a flooded account, but from its owner's browser
     "django.contrib.auth.backends.ModelBackend",
 ]
 # Login throttling (login form and API token): after LOGIN_FAILURE_LIMIT failures for one account
@@ -150,6 +154,9 @@ AXES_FAILURE_LIMIT = env_int("LOGIN_FAILURE_LIMIT", 5, minimum=1)
 AXES_COOLOFF_TIME = timedelta(minutes=env_float("LOGIN_LOCKOUT_MINUTES", 15.0, minimum=0.1))
 AXES_LOCKOUT_PARAMETERS = [["username", "ip_address"], "ip_address"]
 AXES_RESET_ON_SUCCESS = True
+# An account with this many failures (from anywhere) within LOGIN_LOCKOUT_MINUTES takes a password only
+# from a browser it logged in from before (dashboard.login_flood).
+LOGIN_FLOOD_LIMIT = env_int("LOGIN_FLOOD_LIMIT", 20, minimum=1)
 AXES_LOCKOUT_CALLABLE = "dashboard.lockouts.lockout_response"
 AXES_CLIENT_IP_CALLABLE = "dashboard.lockouts.client_ip"
 AXES_VERBOSE = False

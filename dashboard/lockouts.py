@@ -17,10 +17,11 @@ from robot.commands.audit import audit_record
 def lockout_response(request: HttpRequest, original_response: Any = None, credentials: Any = None) -> HttpResponse:
     """429 in the API's error shape, or the login page with a notice."""
     response: HttpResponse
+    message = lockout_message(flooded=getattr(request, "login_flooded", False))
     if is_api_path(request.path):
-        response = api_error(429, lockout_message(), "locked_out")
+        response = api_error(429, message, "locked_out")
     else:
-        response = render(request, "registration/login.html", {"lockout": lockout_message()}, status=429)
+        response = render(request, "registration/login.html", {"lockout": message}, status=429)
     response["Retry-After"] = str(int(settings.AXES_COOLOFF_TIME.total_seconds()))
     return response
 

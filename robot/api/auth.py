@@ -15,8 +15,12 @@ from robot.api.common import error_responses
 from robot.api.tokens import expires_at, token_for
 
 
-def lockout_message() -> str:
+def lockout_message(*, flooded: bool = False) -> str:
     minutes = settings.AXES_COOLOFF_TIME.total_seconds() / 60
+    if flooded:
+        return ("This account has had many failed logins from elsewhere: for now it takes a password only "
+                "in a browser that has logged in to it before. Use that one, try again in "
+                f"{minutes:g} minutes, or ask an admin to clear the failed logins.")
     return (f"Too many failed logins from this account or address: try again in {minutes:g} minutes, "
             "or ask an admin to clear the lockout.")
 
@@ -24,8 +28,8 @@ def lockout_message() -> str:
 class LockedOut(exceptions.Throttled):
     default_code = "locked_out"
 
-    def __init__(self) -> None:
-        super().__init__(wait=settings.AXES_COOLOFF_TIME.total_seconds(), detail=lockout_message())
+    def __init__(self, *, flooded: bool = False) -> None:
+        super().__init__(wait=settings.AXES_COOLOFF_TIME.total_seconds(), detail=lockout_message(flooded=flooded))
 
 
 class TokenView(ObtainAuthToken):
@@ -53,7 +57,7 @@ class TokenView(ObtainAuthToken):
         except exceptions.ValidationError:
             # django-axes flags the request when the account or address is locked out.
             if getattr(request, "axes_locked_out", False):
-                raise LockedOut() from None
+                raise LockedOut(flooded=getattr(request, "login_flooded", False)) from None
             raise
         token = token_for(serializer.validated_data["user"])
         return Response({"token": token.key, "expires": expires_at(token)})

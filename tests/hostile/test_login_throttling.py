@@ -11,8 +11,10 @@ from axes.models import AccessAttempt
 from django.test import Client
 from rest_framework.test import APIClient
 
+from robot import interface as ri
 from robot.models import AuditEntry
 from tests.conftest import PASSWORD
+from tests.helpers import async_wait_until
 
 pytestmark = pytest.mark.django_db
 
@@ -69,13 +71,31 @@ def test_one_address_guessing_many_accounts_is_locked_out(operator, viewer):
     assert form_login("vera", PASSWORD, address="10.7.7.7").status_code == 302
 
 
-def test_failures_from_many_addresses_never_lock_an_operator_out_of_their_own(operator):
-    """Anyone could otherwise keep every operator from logging in to press the E-STOP."""
+def test_failures_from_many_addresses_never_lock_an_operator_out_of_their_own(operator, viewer, settings):
+    """Anyone could otherwise keep every operator from logging in to press the E-STOP. A flood
+    from many addresses makes the account take a password only in a browser that logged in to it
+    before: the guesser's never did; the operator's own did."""
+    settings.LOGIN_FLOOD_LIMIT = 12
+    own = Client(REMOTE_ADDR="10.0.0.9")
+    assert own.post("/accounts/login/", {"username": "otto", "password": PASSWORD}).status_code == 302
+    own.post("/accounts/logout/")
     for n in range(LIMIT * 3):
         form_login("otto", "wrong", address=f"10.5.5.{n}")
         token_login("otto", "wrong", address=f"10.4.4.{n}")
-    assert form_login("otto", PASSWORD, address="10.0.0.9").status_code == 302
-    assert token_login("otto", PASSWORD, address="10.0.0.9").status_code == 200
+    assert own.post("/accounts/login/", {"username": "otto", "password": PASSWORD}).status_code == 302
+    elsewhere = form_login("otto", PASSWORD, address="10.0.0.8")  # the right password, from a new browser
+    assert elsewhere.status_code == 429 and "browser that has logged in to it before" in elsewhere.content.decode()
+    script = token_login("otto", PASSWORD, address="10.0.0.8")
+    assert script.status_code == 429 and script.json()["code"] == "locked_out"
+    assert "browser that has logged in" in script.json()["detail"]
+    assert form_login("vera", PASSWORD, address="10.0.0.7").status_code == 302  # other accounts as usual
+
+
+def test_below_the_flood_limit_the_right_password_works_from_anywhere(operator, settings):
+    settings.LOGIN_FLOOD_LIMIT = 100
+    for n in range(LIMIT * 3):
+        form_login("otto", "wrong", address=f"10.5.5.{n}")
+    assert form_login("otto", PASSWORD, address="10.0.0.8").status_code == 302
 
 
 def test_a_success_resets_the_account_count(operator):
@@ -103,26 +123,86 @@ def test_admins_see_and_clear_lockouts_in_the_admin(operator, admin_user):
     assert form_login("otto", PASSWORD).status_code == 302
 
 
-async def _asgi_login(peer: str, forwarded: str, username: str, password: str) -> int:
-    """A form login through the whole ASGI application, from ``peer``, with that X-Forwarded-For."""
+CSRF = "c" * 32  # a CSRF secret of our own, as cookie and field (or header)
+
+
+async def _asgi(method: str, path: str, *, peer: str, forwarded: str = "", form: str = "",
+                cookies: dict[str, str] | None = None) -> tuple[int, dict[str, str]]:
+    """A request through the whole ASGI application from ``peer`` (with that X-Forwarded-For):
+    its status and the cookies it set."""
     from asgiref.testing import ApplicationCommunicator
 
     from cyborg_site.asgi import application
 
-    csrf = "c" * 32  # a CSRF secret of our own, as cookie and field
-    body = f"username={username}&password={password}&csrfmiddlewaretoken={csrf}".encode()
+    body = f"{form}&csrfmiddlewaretoken={CSRF}".encode() if form else b""
+    jar = {"csrftoken": CSRF, **(cookies or {})}
     headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/x-www-form-urlencoded"),
-               (b"cookie", f"csrftoken={csrf}".encode()),
-               (b"content-length", str(len(body)).encode()), (b"x-forwarded-for", forwarded.encode())]
+               (b"cookie", "; ".join(f"{k}={v}" for k, v in jar.items()).encode()), (b"x-csrftoken", CSRF.encode()),
+               (b"content-length", str(len(body)).encode())]
+    if forwarded:
+        headers.append((b"x-forwarded-for", forwarded.encode()))
     app = ApplicationCommunicator(application, {
-        "type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": "POST", "scheme": "http",
-        "path": "/accounts/login/", "raw_path": b"/accounts/login/", "query_string": b"", "headers": headers,
+        "type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": method, "scheme": "http",
+        "path": path, "raw_path": path.encode(), "query_string": b"", "headers": headers,
         "client": (peer, 50000), "server": ("127.0.0.1", 8000)})
     await app.send_input({"type": "http.request", "body": body, "more_body": False})
-    start = await app.receive_output(timeout=10)
-    while (await app.receive_output(timeout=10)).get("more_body"):
+    start = await app.receive_output(timeout=20)
+    while (await app.receive_output(timeout=20)).get("more_body"):
         pass
-    return start["status"]
+    set_cookies = [v.decode().split(";", 1)[0] for k, v in start["headers"] if k.lower() == b"set-cookie"]
+    return start["status"], dict(c.split("=", 1) for c in set_cookies)
+
+
+async def _asgi_login(peer: str, forwarded: str, username: str, password: str) -> int:
+    return (await _asgi("POST", "/accounts/login/", peer=peer, forwarded=forwarded,
+                        form=f"username={username}&password={password}"))[0]
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_an_operator_logs_in_and_presses_the_estop_during_a_flood_against_their_account(
+        operator, settings, link, sim):
+    """Guessing from many addresses at once, and meanwhile the operator, in their own browser,
+    logs in and presses the E-STOP: it reaches the robot."""
+    settings.TRUSTED_PROXIES = ["127.0.0.1/32"]
+    settings.LOGIN_FLOOD_LIMIT = 10
+    status, device = await _asgi_login_cookies("10.0.0.9", "otto", PASSWORD)  # an earlier day, same browser
+    assert status == 302 and "cyborg_device" in device
+    flooding = asyncio.Event()
+
+    async def flood() -> int:
+        sent = 0
+        while not flooding.is_set():
+            await _asgi_login("127.0.0.1", f"10.66.{sent // 250}.{sent % 250}", "otto", "guess")
+            sent += 1
+        return sent
+
+    guesser = asyncio.ensure_future(flood())
+    try:
+        from dashboard.login_flood import failures_everywhere
+
+        while await asyncio.to_thread(failures_everywhere, "otto") < settings.LOGIN_FLOOD_LIMIT:
+            await asyncio.sleep(0.05)
+        stranger = await _asgi_login("127.0.0.1", "10.0.0.8", "otto", PASSWORD)
+        assert stranger == 429  # the right password from a browser the account never used
+        status, cookies = await _asgi("POST", "/accounts/login/", peer="127.0.0.1", forwarded="10.0.0.9",
+                                      form=f"username=otto&password={PASSWORD}",
+                                      cookies={"cyborg_device": device["cyborg_device"]})
+        assert status == 302, status
+        before = len(await asyncio.to_thread(sim.received, ri.topic("cmd_vel").name))
+        status, _ = await _asgi("POST", "/api/robot/estop/", peer="127.0.0.1", forwarded="10.0.0.9",
+                                cookies={"sessionid": cookies["sessionid"]})
+        assert status == 200, status
+        await async_wait_until(lambda: len(sim.received(ri.topic("cmd_vel").name)) > before, timeout=5,
+                               what="the E-STOP's zero at the robot")
+    finally:
+        flooding.set()
+        sent = await guesser
+    assert sent >= settings.LOGIN_FLOOD_LIMIT
+
+
+async def _asgi_login_cookies(address: str, username: str, password: str) -> tuple[int, dict[str, str]]:
+    return await _asgi("POST", "/accounts/login/", peer="127.0.0.1", forwarded=address,
+                       form=f"username={username}&password={password}")
 
 
 @pytest.mark.django_db(transaction=True)
