@@ -31,10 +31,13 @@ if not SECRET_KEY:
     # Local runs without DEBUG still get a stable key, kept beside the database.
     _key_file = VAR_DIR / "secret_key"
     if not _key_file.exists():
+        import contextlib
         import secrets
 
         VAR_DIR.mkdir(parents=True, exist_ok=True)
-        _key_file.write_text(secrets.token_urlsafe(50))
+        with contextlib.suppress(FileExistsError):  # another process made it first: read that one
+            with os.fdopen(os.open(_key_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "w") as key_out:
+                key_out.write(secrets.token_urlsafe(50))
     SECRET_KEY = _key_file.read_text().strip()
 ALLOWED_HOSTS = env_list("ALLOWED_HOSTS", ["127.0.0.1", "localhost", "[::1]"])
 CSRF_TRUSTED_ORIGINS = env_list("CSRF_TRUSTED_ORIGINS", [])

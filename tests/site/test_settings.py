@@ -28,6 +28,8 @@ def test_it_defaults_to_the_embedded_setup(monkeypatch, tmp_path):
     assert s["VIDEO_URL"] == "http://127.0.0.1:8080"
     assert s["CELERY_BROKER_URL"] == "memory://"
     assert (tmp_path / "secret_key").exists(), "a local secret key is generated once and kept"
+    assert (tmp_path / "secret_key").stat().st_mode & 0o777 == 0o600, "readable by its owner only"
+    assert load(monkeypatch, VAR_DIR=str(tmp_path))["SECRET_KEY"] == s["SECRET_KEY"]
 
 
 def test_it_wires_redis_and_postgres_from_urls(monkeypatch, tmp_path):
