@@ -7,10 +7,12 @@ from django.http import HttpRequest, HttpResponse
 from django.shortcuts import render
 from django.templatetags.static import static
 
+from cyborg_site.csp import csp_extend
 from robot import interface as ri
 from robot.live.keys import DIAGNOSTICS_PAGE_KEYS, STATEMACHINE_KEYS
 
 
+@csp_extend(script_src=("'wasm-unsafe-eval'",))  # Graphviz is WebAssembly
 def statemachine(request: HttpRequest) -> HttpResponse:
     config = {
         "keys": list(STATEMACHINE_KEYS),
