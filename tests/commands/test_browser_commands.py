@@ -41,6 +41,13 @@ def test_it_speaks_and_reports_bad_input_from_the_page(page, stack):
     page.click("#card-voice button[type=submit]")
     expect(page.locator('[data-field="tts.last"]')).to_have_text("Hello from the browser")
     expect(page.locator("#card-voice textarea[name=text]")).to_have_value("")
+    # Text with a character nobody sees (a zero-width joiner): refused with a notice naming it, not spoken.
+    page.fill("#card-voice textarea[name=text]", "Hello\u200dthere")
+    page.click("#card-voice button[type=submit]")
+    expect(page.locator(".notice-error")).to_contain_text(
+        "text: contains an invisible formatting character (U+200D ZERO WIDTH JOINER)")
+    expect(page.locator('[data-field="tts.last"]')).to_have_text("Hello from the browser")
+    page.locator("#notices .notice-error").evaluate_all("notices => notices.forEach((n) => n.remove())")
     # An event the server refuses: the notice names the field, nothing is sent.
     page.evaluate("document.querySelector('#card-events input[name=event]').removeAttribute('pattern')")
     page.fill("#card-events input[name=event]", "not valid!")
