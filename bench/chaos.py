@@ -25,11 +25,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import http.cookiejar
 import json
 import os
 import random
-import re
 import signal
 import ssl
 import sys
@@ -45,7 +43,6 @@ sys.path.insert(0, str(ROOT))
 from websockets.asyncio.client import connect  # noqa: E402
 
 from tests.deploy.topology import PrivatePostgres, Topology  # noqa: E402
-from tests.stack import PASSWORD  # noqa: E402
 from tests.support_processes import PrivateRedis  # noqa: E402
 
 PRESS_EVERY_S = 10.0
@@ -104,15 +101,7 @@ class Operator:
 
     def __init__(self, topo: Topology, username: str) -> None:
         self.origin = topo.url
-        jar = http.cookiejar.CookieJar()
-        opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar),
-                                             urllib.request.HTTPSHandler(context=_TLS))
-        page = opener.open(f"{topo.url}/accounts/login/", timeout=10).read().decode()
-        csrf = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)  # type: ignore[union-attr]
-        form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": csrf})
-        opener.open(urllib.request.Request(f"{topo.url}/accounts/login/", data=form.encode(),
-                                           headers={"Referer": f"{topo.url}/accounts/login/"}), timeout=10).read()
-        self.cookie = "; ".join(f"{c.name}={c.value}" for c in jar)
+        self.cookie = topo.login_cookie(username)
 
 
 async def drive(topo: Topology, operator: Operator, stop: threading.Event) -> None:

@@ -16,8 +16,7 @@ from typing import NamedTuple
 import pytest
 from django.conf import settings
 
-from tests.deploy.topology import _TLS, PrivatePostgres, Topology
-from tests.support_processes import PrivateRedis
+from tests.deploy.topology import _TLS, Topology, on_private_services
 
 pytestmark = [
     pytest.mark.stack,
@@ -28,18 +27,9 @@ HSTS = "max-age=60; includeSubDomains; preload"  # the stack's (stack.sh shorten
 
 @pytest.fixture(scope="module")
 def topology():
-    redis = PrivateRedis().start()
-    postgres = PrivatePostgres().start()
-    topo = Topology(redis_url=redis.url, database_url=postgres.url)
-    try:
+    with on_private_services() as topo:
         topo.script("up")
         yield topo
-    finally:
-        try:
-            topo.down()
-        finally:
-            redis.stop()
-            postgres.remove()
 
 
 class Reply(NamedTuple):

@@ -6,6 +6,7 @@ The tests run in order on one topology; each leaves every process running again.
 
 from __future__ import annotations
 
+import concurrent.futures
 import itertools
 import json
 import os
@@ -24,9 +25,8 @@ from playwright.sync_api import expect
 
 from robot import interface as ri
 from tests.browser.support import login
-from tests.deploy.topology import _TLS, PrivatePostgres, Topology
+from tests.deploy.topology import _TLS, Topology, on_private_services
 from tests.stack import PASSWORD, PYTHON, ROOT
-from tests.support_processes import PrivateRedis
 
 pytestmark = [
     pytest.mark.stack,
@@ -42,23 +42,13 @@ UNWATCHED_S = 5.0
 
 @pytest.fixture(scope="module")
 def topology():
-    redis = PrivateRedis().start()
-    postgres = PrivatePostgres().start()
     # The rolling restart sends a command every 0.1 s: more than the per-user throttle allows.
-    topo = Topology(redis_url=redis.url, database_url=postgres.url, env={"COMMAND_THROTTLE_RATE": "2000/min"})
-    topo.env["STACK_SIM_ARGS"] = f"--pose-rate {RATE_HZ:g}"
-    topo.redis, topo.postgres = redis, postgres
-    try:
+    with on_private_services(env={"COMMAND_THROTTLE_RATE": "2000/min"}) as topo:
+        topo.env["STACK_SIM_ARGS"] = f"--pose-rate {RATE_HZ:g}"
         topo.up()
         topo.manage("shell", "-c", "from history.policies import policy_upsert\n"
                     f"policy_upsert(topic={ODOM!r}, msg_type={ri.topic('odom').type!r}, mode='every')")
         yield topo
-    finally:
-        try:
-            topo.down()
-        finally:
-            redis.stop()
-            postgres.remove()
 
 
 @pytest.fixture(scope="module")
@@ -324,22 +314,6 @@ def test_a_process_that_dies_is_started_again_like_the_units_do(topology):
     assert "exited; starting it again" in topology.log("worker")
 
 
-def _login_cookie(topology: Topology, username: str) -> str:
-    """Log in through nginx like a browser; the Cookie header."""
-    import http.cookiejar
-    import re
-
-    jar = http.cookiejar.CookieJar()
-    opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar),
-                                         urllib.request.HTTPSHandler(context=_TLS))
-    page = opener.open(f"{topology.url}/accounts/login/", timeout=10).read().decode()
-    csrf = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)  # type: ignore[union-attr]
-    form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": csrf})
-    opener.open(urllib.request.Request(f"{topology.url}/accounts/login/", data=form.encode(),
-                                       headers={"Referer": f"{topology.url}/accounts/login/"}), timeout=10).read()
-    return "; ".join(f"{c.name}={c.value}" for c in jar)
-
-
 def test_taking_an_operators_role_closes_their_sockets_in_both_web_processes_within_a_second(topology):
     """Drive socket on one web process, audio socket on the other, a token trusted by both: the
     role is taken away by another process (manage.py), and each hears it through the channel layer."""
@@ -348,7 +322,7 @@ def test_taking_an_operators_role_closes_their_sockets_in_both_web_processes_wit
     from websockets.asyncio.client import connect
     from websockets.exceptions import ConnectionClosed
 
-    cookie = _login_cookie(topology, "otto")
+    cookie = topology.login_cookie("otto")
     token = topology.token("otto")
     for web in (0, 1):  # each web process now trusts the token from its cache
         assert topology.fetch("/api/robot/state/", web=web, user="otto")[0] == 200
@@ -382,7 +356,9 @@ def test_taking_an_operators_role_closes_their_sockets_in_both_web_processes_wit
         return codes, demoted
 
     try:
-        codes, demoted = asyncio.run(scenario())
+        # A thread of its own: the module's browser (Playwright) keeps an event loop on this one.
+        with concurrent.futures.ThreadPoolExecutor(1) as thread:
+            codes, demoted = thread.submit(asyncio.run, scenario()).result()
         assert codes == [4403, 4403], codes
         stopped = topology.received(cmd_vel)[-1]
         assert stopped["linear"]["x"] == 0 and stopped["angular"]["z"] == 0

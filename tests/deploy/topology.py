@@ -6,9 +6,12 @@ Used by tests/deploy and bench/failover.py.
 
 from __future__ import annotations
 
+import contextlib
 import glob
+import http.cookiejar
 import json
 import os
+import re
 import shutil
 import signal
 import ssl
@@ -18,9 +21,11 @@ import time
 import urllib.error
 import urllib.parse
 import urllib.request
+from collections.abc import Iterator
 from pathlib import Path
 
 from tests.stack import PASSWORD, PYTHON, ROOT, USERS, free_port
+from tests.support_processes import PrivateRedis
 
 LEASE = "link-lease"
 _TLS = ssl.create_default_context()
@@ -81,6 +86,9 @@ class PrivatePostgres:
 
 class Topology:
     """scripts/stack.sh with free ports, a temporary folder and the given services."""
+
+    redis: PrivateRedis  # the private services of on_private_services()
+    postgres: PrivatePostgres
 
     def __init__(self, *, redis_url: str, database_url: str, env: dict[str, str] | None = None) -> None:
         self.dir = Path(tempfile.mkdtemp(prefix="cyborg-topology-"))
@@ -227,6 +235,18 @@ class Topology:
         except urllib.error.HTTPError as err:
             return err.code, _json(err.read())
 
+    def login_cookie(self, username: str) -> str:
+        """Log in through nginx with the form, like a browser; the Cookie header."""
+        jar = http.cookiejar.CookieJar()
+        opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar),
+                                             urllib.request.HTTPSHandler(context=_TLS))
+        page = opener.open(f"{self.url}/accounts/login/", timeout=10).read().decode()
+        csrf = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page).group(1)  # type: ignore[union-attr]
+        form = urllib.parse.urlencode({"username": username, "password": PASSWORD, "csrfmiddlewaretoken": csrf})
+        opener.open(urllib.request.Request(f"{self.url}/accounts/login/", data=form.encode(),
+                                           headers={"Referer": f"{self.url}/accounts/login/"}), timeout=10).read()
+        return "; ".join(f"{c.name}={c.value}" for c in jar)
+
     def token(self, user: str) -> str:
         if user not in self.tokens:
             status, body = self.fetch("/api/auth/token/", method="POST",
@@ -250,3 +270,21 @@ class Topology:
                 raise AssertionError(f"{what} not within {timeout} s\n{self.logs()}")
             time.sleep(every)
         return time.monotonic() - started
+
+
+@contextlib.contextmanager
+def on_private_services(env: dict[str, str] | None = None) -> Iterator[Topology]:
+    """A topology (not started) on a private redis-server and PostgreSQL of its own, which a test
+    may stop and start (``topology.redis``, ``topology.postgres``); all taken down after."""
+    redis = PrivateRedis().start()
+    postgres = PrivatePostgres().start()
+    topo = Topology(redis_url=redis.url, database_url=postgres.url, env=env)
+    topo.redis, topo.postgres = redis, postgres
+    try:
+        yield topo
+    finally:
+        try:
+            topo.down()
+        finally:
+            redis.stop()
+            postgres.remove()
