@@ -1,6 +1,7 @@
 """A short schemathesis run against the live schema of a real server (simulator + Daphne),
-as an operator and as a viewer: no server errors, no responses the schema does not describe,
-no writes by the viewer. ``bench/fuzz.py`` runs the same, longer."""
+as an operator and as a viewer, and the hostile values the schema cannot express (tests/fuzzing.py):
+no server errors, no responses the schema does not describe, no writes by the viewer, no hostile
+value taken. ``bench/fuzz.py`` runs the same, longer."""
 
 from __future__ import annotations
 
@@ -39,5 +40,15 @@ def test_fuzzing_the_live_api_finds_no_server_error_schema_violation_or_viewer_w
         assert json.loads(body)["field"] == "text"
         report = fuzz_api(stack.url, operator=("otto", PASSWORD), viewer=("vera", PASSWORD), max_examples=1)
     assert report.requests > 60, report.lines()  # every operation, more than once
-    assert (report.server_errors, report.schema_violations, report.viewer_writes) == (0, 0, 0), \
-        "\n".join(report.problems[:20])
+    assert report.hostile_requests > 100, report.lines()  # non-finite numbers and invisible characters too
+    assert report.clean, "\n".join(report.problems[:20])
+
+
+def test_the_hostile_bodies_put_each_non_finite_literal_and_invisible_character_in_each_leaf():
+    from tests.fuzzing import EDGE_CHARACTERS, NON_FINITE, hostile_json
+
+    bodies = list(hostile_json({"text": "hi", "pose": {"x": 1.5}}))
+    assert '{"text": NaN, "pose": {"x": 1.5}}' in bodies and '{"text": "hi", "pose": {"x": 1e400}}' in bodies
+    assert '{"text": "hi\u200dx", "pose": {"x": 1.5}}' in bodies
+    assert len(bodies) == 2 * len(NON_FINITE) + len(EDGE_CHARACTERS)
+    assert list(hostile_json({})) == list(NON_FINITE)  # no leaves: the whole body
