@@ -84,7 +84,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
             await self.send_json({"kind": "error", "message": "watch needs a list of topic keys"})
             return
         refused = set(await self._refused([t for k in keys if k in allowed for t in _topic_names(k)]))
-        allowed -= {k for k in keys if refused.intersection(_topic_names(k))}
+        allowed -= {k for k in keys if k in allowed and refused.intersection(_topic_names(k))}
         unknown = [k for k in keys if k not in allowed]
         if unknown:
             await self.send_json({"kind": "error", "message": f"Cannot watch: {', '.join(unknown)}"})

@@ -114,8 +114,11 @@ def _few_rounds_password_hashing():
 def _user(username: str, role: Role):
     from cyborg_site.roles import role_of
     from dashboard.accounts import create_user
+    from robot.models import AuditEntry
 
     user = create_user(username, role, password=PASSWORD)[0]
+    # A test's accounts were there before it: its audit holds only what the test itself did.
+    AuditEntry.objects.filter(action__startswith="account.").delete()
     # Prime the role cache so async consumers in tests need no query from another thread
     # (the test's transaction holds SQLite's in-memory tables).
     role_of(user)
