@@ -75,6 +75,7 @@ test-repeat: install browser nginx
 lint: install
 	$(BIN)/ruff check .
 	env -u REDIS_URL -u DATABASE_URL $(BIN)/mypy
+	$(BIN)/lint-imports --no-cache
 
 bench: install wrk
 	for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b; done

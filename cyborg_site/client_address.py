@@ -11,14 +11,15 @@ paths, Django's ``REMOTE_ADDR``, django-axes, the websocket consumers) sees the 
 from __future__ import annotations
 
 import ipaddress
+from contextvars import ContextVar
 from functools import lru_cache
 from typing import Any
 
 from django.conf import settings
 
-from robot.commands.audit import client_address
-
 Network = ipaddress.IPv4Network | ipaddress.IPv6Network
+# The client of the request or socket being served (set for each connection, below): the audit's.
+client_address: ContextVar[str] = ContextVar("client_address", default="")
 
 
 @lru_cache(maxsize=4)

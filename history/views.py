@@ -1,8 +1,8 @@
 from django.http import HttpRequest, HttpResponse
 from django.urls import reverse
 
+from cyborg_site.rendering import render_safe
 from cyborg_site.roles import is_admin
-from dashboard.rendering import render_safe
 from history.selectors import recorded_topics
 from robot import interface as ri
 

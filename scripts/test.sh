@@ -43,7 +43,7 @@ services() {
 }
 lint() {
   [ "${TEST_LINT:-1}" = 1 ] || return 0
-  $BIN/ruff check . && env -u REDIS_URL -u DATABASE_URL $BIN/mypy
+  $BIN/ruff check . && env -u REDIS_URL -u DATABASE_URL $BIN/mypy && $BIN/lint-imports --no-cache
 }
 
 times=()
@@ -63,7 +63,7 @@ mkdir -p var/coverage
 start=$SECONDS
 status=0
 
-# Lint and types beside the first part: mypy is one process, and much of a test part is waiting.
+# Lint, types and layers beside the first part: mypy is one process, and much of a test part is waiting.
 lint_start=$SECONDS
 (lint > "$LOGS/lint.log" 2>&1; echo $? > "$LOGS/lint.status"; echo $((SECONDS - lint_start)) > "$LOGS/lint.s")&
 lint_pid=$!
@@ -77,10 +77,10 @@ part "Services: PostgreSQL + Redis, the tests that depend on the wiring" \
 # it runs alone, with nothing else competing for the two cores.
 part "Services: the production topology, alone" services run_pytest topology -m stack "$@" || status=1
 wait $lint_pid || true
-echo "== Lint and types (ruff, mypy)"
+echo "== Lint, types and layers (ruff, mypy, lint-imports)"
 cat "$LOGS/lint.log"
 lint_status=$(cat "$LOGS/lint.status")
-times=("Lint and types (ruff, mypy), beside the first part: $(cat "$LOGS/lint.s") s$([ "$lint_status" = 0 ] \
+times=("Lint, types and layers (ruff, mypy, lint-imports), beside the first part: $(cat "$LOGS/lint.s") s$([ "$lint_status" = 0 ] \
   || echo ", FAILED (exit $lint_status)")" "${times[@]}")
 [ "$lint_status" = 0 ] || status=1
 

@@ -7,7 +7,7 @@ from urllib.parse import urlencode
 from django.core.paginator import Paginator
 from django.http import HttpRequest, HttpResponse
 
-from dashboard.rendering import render_safe
+from cyborg_site.rendering import render_safe
 from robot.commands.selectors import AUDIT_FILTERS, audit_entries
 from robot.models import AuditEntry
 

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from contextvars import ContextVar
 from typing import Any
 
+from cyborg_site.client_address import client_address
 from cyborg_site.text import scrub, scrub_json
 from robot.models import AuditEntry
-
-# The client of the request or socket being served (set for each connection: cyborg_site.client_address).
-client_address: ContextVar[str] = ContextVar("client_address", default="")
 
 
 def audit_record(

@@ -24,8 +24,8 @@ from typing import IO, Any
 from django.conf import settings
 from django.db import transaction
 
+from cyborg_site.client_address import client_address
 from cyborg_site.text import scrub, scrub_json
-from robot.commands.audit import client_address
 from robot.models import AuditEntry
 
 log = logging.getLogger(__name__)

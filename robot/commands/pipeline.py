@@ -30,8 +30,8 @@ from typing import Any
 
 from asgiref.sync import async_to_sync, sync_to_async
 
+from cyborg_site.client_address import client_address
 from cyborg_site.roles import is_operator, roles_cached
-from robot.commands.audit import client_address
 from robot.commands.audit_writer import writer
 from robot.commands.gate import Declaration, declaration
 from robot.commands.latch import ensure_released
