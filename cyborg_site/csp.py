@@ -50,7 +50,7 @@ def csp_extend(**extra: tuple[str, ...]) -> Callable[[View], View]:
     return decorate
 
 
-_DEFAULT = policy_header()
+DEFAULT = policy_header()
 
 
 class ContentSecurityPolicyMiddleware:
@@ -60,7 +60,7 @@ class ContentSecurityPolicyMiddleware:
     def __call__(self, request: HttpRequest) -> HttpResponseBase:
         response = self.get_response(request)
         extra = getattr(request, "_csp_extra", None)
-        response.headers.setdefault(HEADER, policy_header(extra) if extra else _DEFAULT)
+        response.headers.setdefault(HEADER, policy_header(extra) if extra else DEFAULT)
         return response
 
     def process_view(self, request: HttpRequest, view_func: Callable[..., Any], view_args: Any,

@@ -28,6 +28,7 @@ from django.http import HttpResponse
 from django.middleware.clickjacking import XFrameOptionsMiddleware
 from django.middleware.security import SecurityMiddleware
 
+from cyborg_site import csp
 from robot.api.errors import SafeJSONRenderer
 from robot.api.tokens import CachedTokenAuthentication
 from robot.commands.selectors import arobot_state
@@ -67,6 +68,7 @@ class SiteChecks:
     def finish(self, request: ASGIRequest, response: HttpResponse) -> HttpResponse:
         self._frames.process_response(request, response)
         response["Content-Length"] = str(len(response.content))  # where CommonMiddleware sets it
+        response.headers.setdefault(csp.HEADER, csp.DEFAULT)  # as cyborg_site.csp's middleware does
         return self._security.process_response(request, response)
 
 
