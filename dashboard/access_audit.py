@@ -113,6 +113,8 @@ def _roles_changed(sender: type, instance: Any, action: str, reverse: bool, pk_s
 def _roles_settle(user: Any, before: list[str]) -> None:
     """One entry per person and transaction: ``groups.set()`` removes, then adds."""
     pending = connection.__dict__.setdefault("_audit_roles_pending", {})
+    if not connection.run_on_commit:
+        pending.clear()  # a rolled-back transaction's: their records were dropped with it
     if user.pk in pending:
         return
     pending[user.pk] = before

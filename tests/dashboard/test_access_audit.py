@@ -120,3 +120,18 @@ def test_named_settings_added_changed_and_removed(admin_api):
     assert [e.outcome for e in entries] == ["location dock added", "location dock changed", "location dock removed"]
     assert entries[0].username == "ada" and entries[0].source == "api"
     assert entries[1].params["from"]["x"] == 1.0 and entries[1].params["to"]["x"] == 3.0
+
+
+def test_a_role_change_rolled_back_leaves_later_ones_audited(operator):
+    from django.db import transaction
+
+    _fresh()
+    viewers, operators = Group.objects.get(name=Role.VIEWER), Group.objects.get(name=Role.OPERATOR)
+    with pytest.raises(RuntimeError), transaction.atomic():
+        operator.groups.set([viewers])
+        raise RuntimeError("the change fails")
+    assert not _entries("account.roles")
+    with transaction.atomic():
+        operator.groups.set([viewers, operators])
+    [entry] = _entries("account.roles")
+    assert entry.params == {"username": "otto", "from": ["operator"], "to": ["operator", "viewer"]}
