@@ -17,6 +17,7 @@ from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
 from cyborg_site.read_throttle import ReadThrottle  # noqa: E402
+from cyborg_site.server_versions import refuse_other_releases  # noqa: E402
 from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
@@ -31,6 +32,8 @@ application = ProtocolTypeRouter(
     }
 )
 
+# Server internals are patched below, for the releases they were made for only.
+refuse_other_releases()
 # Same autobahn ordering issue as the robot link (robot/link/connection.py): without a class default,
 # browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
 WebSocketProtocol.tcpNoDelay = True
