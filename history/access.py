@@ -6,15 +6,16 @@ from __future__ import annotations
 
 from typing import Any
 
+from django.db.models import Q
+
 from cyborg_site.roles import is_operator
 from history.models import TopicPolicy
 from robot import interface as ri
 
 
 def sensitive_topics() -> set[str]:
-    marked = TopicPolicy.objects.filter(sensitive=True).values_list("topic", flat=True)
-    sound = TopicPolicy.objects.filter(msg_type__in=ri.SOUND_TYPES).values_list("topic", flat=True)
-    return {*marked, *sound, *(t.name for t in ri.topics() if t.type in ri.SOUND_TYPES)}
+    recorded = TopicPolicy.objects.filter(Q(sensitive=True) | Q(msg_type__in=ri.SOUND_TYPES))
+    return {*recorded.values_list("topic", flat=True), *(t.name for t in ri.topics() if t.type in ri.SOUND_TYPES)}
 
 
 def refused_topics(user: Any, topics: list[str]) -> list[str]:
