@@ -42,7 +42,10 @@ async def test_an_mp3_microphone_reaches_listeners_as_pcm_of_its_tone(link, sim,
     pcm = b"".join(ears.chunks)
     assert len(pcm) / 2 / 16000 > 0.5
     assert dominant_hz(pcm[4000:], 16000) == pytest.approx(440, abs=5)
-    assert b"".join(more.chunks)[:len(pcm)] == pcm[:len(b"".join(more.chunks))]  # one decode, shared
+    # One decode, shared: the same PCM, though the second listener's first chunk may be a later one
+    # (scaled, each socket's listen reaches the relay in its own time).
+    theirs = b"".join(more.chunks)
+    assert theirs[:4000] in pcm or pcm[:4000] in theirs
     assert sim.subscription_count(MIC) == 1
     await ears.close()
     await more.close()
