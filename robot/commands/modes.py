@@ -32,6 +32,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.commands import moderoute
+from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, Command, arun
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
@@ -49,6 +50,8 @@ MAX_STEPS = 8
 # How long to wait for the robot's first report when it has said nothing since the link
 # (re)connected: its SMACH status repeats about once a second.
 SETTLE_S = 1.5
+# How often a pause in a mode change looks at the E-STOP latch.
+LATCH_POLL_S = 0.03
 
 
 def sequence_pause_s(mode: ri.Mode) -> float:
@@ -134,6 +137,16 @@ class _Walk:
         self.done.append(what)
 
 
+async def _pause(seconds: float) -> None:
+    """Sleep, ending at once with ``EstopEngaged`` should the E-STOP latch meanwhile: the stop's own
+    walk to suspension waits for a change under way to end, and must not wait out its pause."""
+    deadline = asyncio.get_running_loop().time() + seconds
+    while (left := deadline - asyncio.get_running_loop().time()) > 0:
+        await ensure_released()
+        await asyncio.sleep(min(LATCH_POLL_S, left))
+    await ensure_released()
+
+
 async def _change(mode: ri.Mode) -> str:
     watch = StateWatch()
     await watch.start(settle_s=SETTLE_S)
@@ -145,7 +158,7 @@ async def _change(mode: ri.Mode) -> str:
     await walk.to_suspension()
     if by_server:
         if mode is not ri.Mode.STOP:
-            await asyncio.sleep(ri.COMMANDER_PAUSE_S)  # the commander's pause before entering a mode
+            await _pause(ri.COMMANDER_PAUSE_S)  # the commander's pause before entering a mode
             if emotion_on:
                 await walk.emotion_system(True)
             await walk.enter()
