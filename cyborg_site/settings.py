@@ -168,6 +168,23 @@ API_TOKEN_DAYS = env_float("API_TOKEN_DAYS", 30.0, minimum=0.0)
 # The reverse proxies (addresses or networks) whose X-Forwarded-For and X-Forwarded-Proto are
 # believed: the client address of lockouts, throttles and the audit (cyborg_site.client_address).
 TRUSTED_PROXIES = env_list("TRUSTED_PROXIES", [])
+# Single sign-on with the organisation's OpenID Connect provider (dashboard.sso), beside the local
+# accounts; unset OIDC_ISSUER: local accounts only. Register SITE/accounts/sso/callback/ as the
+# redirect URL. OIDC_ROLES maps claim values of OIDC_ROLE_CLAIM (or, written @domain, a verified
+# e-mail domain) to roles: "cyborg-operators=operator @ntnu.no=viewer"; the highest match wins, and
+# a person matching none gets OIDC_DEFAULT_ROLE, or is refused when that is empty.
+OIDC_ISSUER = env_str("OIDC_ISSUER")
+OIDC_CLIENT_ID = env_str("OIDC_CLIENT_ID")
+OIDC_CLIENT_SECRET = env_str("OIDC_CLIENT_SECRET")
+OIDC_SCOPES = env_str("OIDC_SCOPES", "openid profile email")
+OIDC_NAME = env_str("OIDC_NAME", "your organisation's account")
+OIDC_ROLE_CLAIM = env_str("OIDC_ROLE_CLAIM", "groups")
+OIDC_ROLES = env_str("OIDC_ROLES")
+OIDC_DEFAULT_ROLE = env_str("OIDC_DEFAULT_ROLE")
+OIDC_LEEWAY_S = env_int("OIDC_LEEWAY_S", 30, minimum=0)  # clock skew allowed on the ID token's times
+# Only superusers and accounts given "May sign in with a local password" (Admin → Users) may then
+# use the login form; tokens for scripts work as before.
+SSO_REQUIRED = env_bool("SSO_REQUIRED", False)
 LOGIN_URL = "login"
 LOGIN_REDIRECT_URL = "dashboard:home"
 LOGOUT_REDIRECT_URL = "login"

@@ -1,11 +1,11 @@
 from django.contrib import admin
-from django.contrib.auth import views as auth_views
 from django.templatetags.static import static
 from django.urls import include, path
 from django.utils.functional import lazy
 from django.views.generic import RedirectView
 
 from dashboard.urls import api_urlpatterns as dashboard_api
+from dashboard.views import login
 from history.urls import api_urlpatterns as history_api
 
 urlpatterns = [
@@ -13,8 +13,10 @@ urlpatterns = [
     # Browsers ask for it on pages without an icon link (the admin); not permanent, the name may be hashed.
     # Resolved on the first request: with hashed names the manifest need not exist when URLs load.
     path("favicon.ico", RedirectView.as_view(url=lazy(static, str)("img/cyborg.svg"))),
-    path("accounts/login/", auth_views.LoginView.as_view(redirect_authenticated_user=True), name="login"),
-    path("accounts/logout/", auth_views.LogoutView.as_view(), name="logout"),
+    path("accounts/login/", login.LoginView.as_view(), name="login"),
+    path("accounts/logout/", login.LogoutView.as_view(), name="logout"),
+    path("accounts/sso/login/", login.sso_login, name="sso-login"),
+    path("accounts/sso/callback/", login.sso_callback, name="sso-callback"),
     path("api/", include("robot.api.urls")),
     path("api/history/", include(history_api)),
     path("api/", include(dashboard_api)),

@@ -1,5 +1,14 @@
+from typing import Any
+
 from django.apps import AppConfig
+from django.core import checks
 from django.db.models.signals import post_migrate
+
+
+def sso_settings_check(**kwargs: Any) -> list[checks.CheckMessage]:
+    from dashboard.sso.config import config_problems
+
+    return [checks.Error(f"Single sign-on: {problem}.", id="dashboard.E001") for problem in config_problems()]
 
 
 class DashboardConfig(AppConfig):
@@ -12,6 +21,7 @@ class DashboardConfig(AppConfig):
         from dashboard.accounts import ensure_role_groups
         from dashboard.lockouts import audit_lockout
 
+        checks.register(sso_settings_check)
         post_migrate.connect(lambda **kwargs: ensure_role_groups(), sender=self, weak=False)
         user_locked_out.connect(audit_lockout, dispatch_uid="dashboard.audit_lockout")
         import dashboard.access_audit  # its receivers: access and settings changes are audited

@@ -15,3 +15,22 @@ class UserPreference(models.Model):
 
     def __str__(self) -> str:
         return f"{self.user} {self.name}"
+
+
+class SsoIdentity(models.Model):
+    """A person of the organisation's identity provider (issuer and subject) and the account they sign in to."""
+
+    user = models.OneToOneField(settings.AUTH_USER_MODEL, on_delete=models.CASCADE, related_name="sso_identity")
+    issuer = models.CharField(max_length=255)
+    subject = models.CharField(max_length=255)
+    role = models.CharField(max_length=16, blank=True,
+                            help_text="The role the provider's claims gave at the last login.")
+    last_login = models.DateTimeField(auto_now=True)
+
+    class Meta:
+        verbose_name = "single sign-on identity"
+        constraints = [models.UniqueConstraint(fields=["issuer", "subject"], name="one_account_per_identity")]
+        permissions = [("sign_in_with_password", "May sign in with a local password while single sign-on is required")]
+
+    def __str__(self) -> str:
+        return f"{self.user} ({self.issuer} {self.subject})"

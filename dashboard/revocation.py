@@ -74,6 +74,12 @@ def _logged_out(sender: type, request: Any, user: Any, **kwargs: Any) -> None:
         _tell(user.pk, session_key=request.session.session_key)
 
 
+def sessions_ended(user_id: object, session_keys: list[str]) -> None:
+    """Sessions deleted by an admin: their open sockets close as after a logout."""
+    for key in session_keys:
+        _tell(user_id, session_key=key)
+
+
 def still_allowed(scope: dict[str, Any], *, operator: bool, session_key: str) -> int | None:
     """After an access change: the close code for this socket, or None if it may stay open.
     ``session_key``: the logout's (empty for any other change)."""

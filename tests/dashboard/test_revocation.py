@@ -99,3 +99,33 @@ async def test_a_logout_closes_that_sessions_sockets_only(link, sim, operator, a
         await still_open.send_to(text_data='{"type": "nonsense"}')
         assert (await still_open.receive_json_from(timeout=5))["type"] in ("hello", "error")
         await still_open.disconnect()
+
+
+async def test_an_admin_ends_a_persons_sessions_and_tokens_at_once(link, sim, operator, admin_user):
+    """Admin → Users → "End their sessions and API tokens now": every session of that person ends
+    (their open sockets close as after a logout), their tokens stop working; the admin's stay."""
+    from rest_framework.authtoken.models import Token
+
+    from robot.models import AuditEntry
+
+    phone, cookie = await database_sync_to_async(_session_of)(operator)
+    laptop, other_cookie = await database_sync_to_async(_session_of)(operator)
+    admin, _ = await database_sync_to_async(_session_of)(admin_user)
+    token = await database_sync_to_async(Token.objects.create)(user=operator)
+    drive = await _drive(cookie, sim)
+    audio = await _socket("/ws/audio/", other_cookie)
+    before = len(await twists(sim))
+    answer = await database_sync_to_async(admin.post)(
+        "/admin/auth/user/", {"action": "end_sessions", "_selected_action": [operator.pk]}, follow=True)
+    assert "2 sessions and 1 API tokens of otto ended." in answer.content.decode()
+    await _closed_with(drive, 4401)
+    await _closed_with(audio, 4401)
+    await wait_twist(sim, is_zero, after=before, what="the driver's zero")
+    for client in (phone, laptop):
+        assert (await database_sync_to_async(client.get)("/")).status_code == 302
+    assert (await database_sync_to_async(Client().get)(
+        "/api/robot/state/", HTTP_AUTHORIZATION=f"Token {token.key}")).status_code == 401
+    assert (await database_sync_to_async(admin.get)("/")).status_code == 200
+    entry = await database_sync_to_async(AuditEntry.objects.filter(action="account.sessions_ended").get)()
+    assert (entry.username, entry.params, entry.outcome) == ("ada", {"username": "otto"},
+                                                             "2 sessions and 1 API tokens ended")
