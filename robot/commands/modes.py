@@ -13,7 +13,7 @@ commander's sequences fail from inside the behaviour container, and checks the r
 Mode changes are serialised: a second request while one runs is refused with 409 ``Busy``
 rather than queued (an operator who clicked Demo then Manual should see that Demo is still
 being applied, not have Manual fire half a second later). The lock is in-process in the
-embedded default and a Redis key (``SET NX PX``, expiring just after the longest sequence)
+embedded default and a redis-py ``Lock`` (expiring just after the longest sequence)
 when ``REDIS_URL`` is set, so it holds across web processes. ``perform_mode`` is the raw
 work without the lock, role check or audit: the emergency stop composes it and must never
 be refused because a mode change is running.
@@ -22,6 +22,7 @@ be refused because a mode change is running.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
 import uuid
 from collections.abc import AsyncIterator
@@ -29,6 +30,7 @@ from contextlib import asynccontextmanager
 from typing import Any
 
 from django.conf import settings
+from redis.exceptions import LockError
 
 from robot import interface as ri
 from robot.commands import moderoute
@@ -227,7 +229,6 @@ async def announce_request(mode: ri.Mode, *, by: str, status: str, error: str = 
 
 _local_lock = threading.Lock()  # views run on several loops/threads: not an asyncio.Lock
 _local_holder = ""
-_RELEASE = "if redis.call('get', KEYS[1]) == ARGV[1] then return redis.call('del', KEYS[1]) else return 0 end"
 
 
 def _busy(holder: str) -> Busy:
@@ -265,13 +266,12 @@ async def serialised(mode: ri.Mode) -> AsyncIterator[None]:
 @asynccontextmanager
 async def _redis_lock(mode: ri.Mode) -> AsyncIterator[None]:
     # Expires just after the longest a sequence can take, should this process die holding it.
-    ttl_s = longest_change_s(mode) + 1.0
-    token = f"{uuid.uuid4().hex}:{mode.short}"
-    client = redis_clients.aclient()
-    if not await client.set(_lock_key(), token, nx=True, px=int(ttl_s * 1000)):
-        held = await client.get(_lock_key())
+    lock = redis_clients.aclient().lock(_lock_key(), timeout=longest_change_s(mode) + 1.0, blocking=False)
+    if not await lock.acquire(token=f"{uuid.uuid4().hex}:{mode.short}"):
+        held = await lock.redis.get(_lock_key())
         raise _busy((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
     try:
         yield
     finally:
-        await client.eval(_RELEASE, 1, _lock_key(), token)
+        with contextlib.suppress(LockError):  # expired meanwhile: nothing of ours to release
+            await lock.release()
