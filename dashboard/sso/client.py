@@ -39,7 +39,11 @@ def redirect_to_provider(config: SsoConfig, request: HttpRequest, callback_url: 
 def claims_from_callback(config: SsoConfig, request: HttpRequest) -> tuple[dict[str, Any], str]:
     """The verified ID token's claims and the token itself (for logging out at the provider).
     Raises one of ``REFUSALS``."""
-    token = _app(config).authorize_access_token(request, leeway=config.leeway_s)
+    # (Authlib checks the audience only through ``azp`` unless told: a token for another client
+    # naming this one as its authorised party would pass.)
+    must_be = {"iss": {"essential": True, "value": config.issuer},
+               "aud": {"essential": True, "value": config.client_id}}
+    token = _app(config).authorize_access_token(request, leeway=config.leeway_s, claims_options=must_be)
     claims = token.get("userinfo")
     if not claims:
         raise OAuthError(error="no_id_token", description="the provider sent no ID token")

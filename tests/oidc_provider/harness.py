@@ -127,8 +127,8 @@ class OidcProvider:
     def jwks_url(self) -> str:
         return f"{self.issuer}/.well-known/jwks.json"
 
-    def _control(self, method: str, path: str, timeout_s: float = 10) -> Any:
-        response = requests.request(method, f"{self.base_url}/test/{path}",
+    def _control(self, method: str, path: str, timeout_s: float = 10, body: Any = None) -> Any:
+        response = requests.request(method, f"{self.base_url}/test/{path}", json=body,
                                     headers={"X-Test-Control": self._control_token}, timeout=timeout_s)
         response.raise_for_status()
         return response.json()
@@ -136,6 +136,16 @@ class OidcProvider:
     def rotate_key(self) -> str:
         """A new active signing key; the previous stays in the JWKS, the one before it leaves. Its kid."""
         return self._control("POST", "rotate-key")["kid"]
+
+    def set_groups(self, username: str, groups: list[str]) -> None:
+        """``username``'s ``groups`` claim from the next login on."""
+        self._control("POST", f"users/{username}/groups", body=groups)
+
+    def misbehave(self, mischief: str) -> None:
+        """The token endpoint's next ID token is broken: ``tampered`` (a claim changed after signing),
+        ``wrong_audience``, ``wrong_issuer``, ``expired``, ``unknown_key`` (signed by a key never
+        published) or ``no_id_token``."""
+        self._control("POST", "misbehave", body={"mischief": mischief})
 
     def signing_keys(self) -> dict[str, Any]:
         """``{"active": pem, "inactive": [pem, ...]}``: the private keys, as PEM."""
