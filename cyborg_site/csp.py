@@ -3,7 +3,8 @@
 Scripts, styles, images and connections (websockets too: CSP3's 'self' covers ws: and wss: on the
 page's own host and port) come from the site itself; no inline script, style or style attribute
 (a page's data travels in ``json_script`` blocks, which are not run); no plugins, no framing, no
-<base>, forms posted only here. Images may also be data: and blob: URLs (drawn in the browser).
+<base>, forms posted only here (and, with single sign-on, the logout's redirect on to the provider,
+which browsers check against form-action too). Images may also be data: and blob: URLs.
 
 A view that needs one thing more says so with ``csp_extend``: the state machine page compiles
 Graphviz to WebAssembly (``'wasm-unsafe-eval'`` lets WebAssembly compile, not JavaScript's eval).
@@ -13,9 +14,11 @@ The policy is a constant, so a few lines here instead of a library; Django 6.0's
 
 from __future__ import annotations
 
+import urllib.parse
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
+from django.conf import settings
 from django.http import HttpRequest, HttpResponseBase
 
 HEADER = "Content-Security-Policy"
@@ -30,6 +33,15 @@ POLICY: dict[str, tuple[str, ...]] = {
     "frame-ancestors": ("'none'",),
     "form-action": ("'self'",),
 }
+
+
+def _origin(url: str) -> str:
+    parts = urllib.parse.urlsplit(url)
+    return f"{parts.scheme}://{parts.netloc}"
+
+
+if settings.OIDC_ISSUER:
+    POLICY["form-action"] += (_origin(settings.OIDC_ISSUER),)
 
 View = TypeVar("View", bound=Callable[..., Any])
 

@@ -14,7 +14,13 @@ export function socketURL(path) {
   return `${proto}://${location.host}${path}`;
 }
 
+// A logout's own answer (which may first end the provider's session) must win over the sockets
+// that this logout closes.
+let loggingOut = false;
+document.addEventListener("submit", (ev) => { if (ev.target.matches("form[data-logout]")) loggingOut = true; });
+
 // Where a page sends the browser when the server says the session has ended.
 export function toLogin() {
+  if (loggingOut) return;
   location.href = `${site.urls.login}?next=${encodeURIComponent(location.pathname + location.search)}`;
 }
