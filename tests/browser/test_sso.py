@@ -91,3 +91,27 @@ def test_a_rotated_signing_key_is_survived_and_logout_ends_both_sessions(browser
         page.wait_for_url(f"{stack.url}/accounts/login/**")
         page.get_by_role("link", name="Sign in with Feide").click()
         expect(page.locator("input[name=password]")).to_be_visible()  # the provider asks again
+
+
+@pytest.mark.parametrize("mischief", ["tampered", "wrong_audience", "expired"])
+def test_a_broken_id_token_is_refused(browser, sso_stack, mischief):
+    stack, provider = sso_stack
+    with fresh_page(browser) as page:
+        provider.misbehave(mischief)
+        sign_in(page, stack, "kari")
+        expect(page.get_by_role("alert")).to_contain_text("could not be verified")
+        page.goto(f"{stack.url}/")
+        page.wait_for_url(f"{stack.url}/accounts/login/?next=/")
+
+
+def test_a_replayed_callback_is_refused(browser, sso_stack):
+    stack, _ = sso_stack
+    with fresh_page(browser) as page:
+        callbacks: list[str] = []
+        page.on("request", lambda request: callbacks.append(request.url) if "/sso/callback/" in request.url else None)
+        sign_in(page, stack, "kari")
+        page.wait_for_url(f"{stack.url}/")
+        page.get_by_role("button", name="Log out").click()
+        page.wait_for_url(f"{stack.url}/accounts/login/**")
+        page.goto(callbacks[0])
+        expect(page.get_by_role("alert")).to_contain_text("could not be verified")
