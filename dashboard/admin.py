@@ -17,16 +17,6 @@ from robot.commands.audit import audit_record
 User = get_user_model()
 
 
-class SsoIdentityInline(admin.StackedInline):
-    model = SsoIdentity
-    can_delete = False
-    readonly_fields = ("issuer", "subject", "role", "last_login")
-    extra = 0
-
-    def has_add_permission(self, request: HttpRequest, obj: Any = None) -> bool:
-        return False
-
-
 @admin.action(description="End their sessions and API tokens now")
 def end_sessions(modeladmin: admin.ModelAdmin, request: HttpRequest, queryset: QuerySet) -> None:
     for user in queryset:
@@ -39,8 +29,17 @@ def end_sessions(modeladmin: admin.ModelAdmin, request: HttpRequest, queryset: Q
 
 
 class PersonAdmin(UserAdmin):
-    inlines = (SsoIdentityInline,)
     actions = (end_sessions,)
+    fieldsets = (*(UserAdmin.fieldsets or ()), ("Single sign-on", {"fields": ("single_sign_on",)}))
+    readonly_fields = ("single_sign_on",)
+
+    @admin.display(description="Identity")
+    def single_sign_on(self, user: Any) -> str:
+        identity = SsoIdentity.objects.filter(user=user).first()
+        if identity is None:
+            return "None: a local account"
+        return (f"{identity.subject} at {identity.issuer}; the provider's claims gave {identity.role or 'no role'} "
+                f"at the last login ({identity.last_login:%Y-%m-%d %H:%M})")
 
 
 admin.site.unregister(User)

@@ -69,3 +69,12 @@ def test_without_a_provider_the_login_page_is_as_before(client):
     page = client.get("/accounts/login/").content.decode()
     assert "Sign in with" not in page
     assert client.get("/accounts/sso/login/").status_code == 404
+
+
+def test_the_admin_shows_a_persons_identity(admin_user, operator):
+    user = account_for(ISSUER, {"sub": "8c1e", "preferred_username": "kari"}, Role.OPERATOR)
+    client = Client()
+    client.force_login(admin_user)
+    page = client.get(f"/admin/auth/user/{user.pk}/change/").content.decode()
+    assert f"8c1e at {ISSUER}; the provider&#x27;s claims gave operator at the last login" in page
+    assert "None: a local account" in client.get(f"/admin/auth/user/{operator.pk}/change/").content.decode()
