@@ -80,6 +80,7 @@ def sso_login(request: HttpRequest) -> HttpResponse:
 @never_cache
 def sso_callback(request: HttpRequest) -> HttpResponse:
     config = _config()
+    refusal: Refusal | None
     try:
         claims, id_token = claims_from_callback(config, request)
     except REFUSALS as exc:
