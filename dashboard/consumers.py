@@ -8,8 +8,8 @@ from typing import Any
 from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
-from cyborg_site.direct_frames import EXTENSION as FRAMES_EXTENSION
 from cyborg_site.roles import is_operator, roles_cached
+from cyborg_site.server_patches.direct_frames import EXTENSION as FRAMES_EXTENSION
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.services_watch import ensure_watching
 from history.access import refusal, refused_topics
@@ -53,7 +53,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         except Exception:  # Redis is away: the page still opens, and its status says so
             status = None
         await self.send(text_data=self.hub.status_frame(status_text(status)))
-        # Under Daphne: frames written straight to the connection (cyborg_site.direct_frames).
+        # Under Daphne: frames written straight to the connection (cyborg_site.server_patches.direct_frames).
         writer = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.socket = self.hub.attach(self._send_text, writer)
 

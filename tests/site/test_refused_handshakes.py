@@ -11,7 +11,7 @@ from channels.testing import WebsocketCommunicator
 from daphne.ws_protocol import WebSocketProtocol
 from django.conf import settings
 
-from cyborg_site import refused_handshakes
+from cyborg_site.server_patches import refused_handshakes
 from tests.helpers import wait_until
 from tests.stack import Stack
 
@@ -48,7 +48,7 @@ def handshake(port: int, host: str | None, origin: str | None) -> str:
 
 
 def test_daphne_still_fails_closing_a_handshake_autobahn_refused():
-    """The canary: when a Daphne release closes such a connection itself, cyborg_site.refused_handshakes goes."""
+    """The canary: when a Daphne release closes such a connection itself, the refused_handshakes patch goes."""
     with pytest.raises(AttributeError, match="server"):
         refused_handshakes.daphne_on_close(WebSocketProtocol(), False, None, None)
     refused_handshakes.on_close_after_connect(WebSocketProtocol(), False, None, None)

@@ -1,6 +1,6 @@
 """The server patches are made for exact Daphne, Twisted and autobahn releases: the server refuses
 others, and each private part of theirs a patch uses has a canary here that fails when a release
-renames or drops it (then the patch is checked, and the pins in cyborg_site/server_versions.py
+renames or drops it (then the patch is checked, and the pins in cyborg_site/server_patches/releases.py
 move with the lock)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import inspect
 import pytest
 from django.core import checks
 
-from cyborg_site import server_versions
+from cyborg_site.server_patches import releases as server_versions
 
 
 def test_the_installed_releases_are_the_patched_ones():
@@ -26,7 +26,7 @@ def test_another_release_is_refused_at_start_and_by_the_checks(monkeypatch):
 
 
 def test_direct_frames_canaries():
-    """cyborg_site.direct_frames writes to Twisted's transport and reads autobahn's state."""
+    """cyborg_site.server_patches.direct_frames writes to Twisted's transport and reads autobahn's state."""
     from autobahn.websocket.protocol import WebSocketProtocol
     from twisted.internet import abstract, reactor
 

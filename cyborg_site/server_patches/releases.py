@@ -1,9 +1,9 @@
 """The exact Daphne, Twisted and autobahn releases the server patches were written and measured
-against (``cyborg_site.direct_frames``, ``reaping``, ``refused_handshakes``, ``drain`` and the two
-lines in ``asgi.py``; each says why it is there, ``docs/performance.md`` what it saves). Another
-release may have changed what they touch, so the server refuses to start on one: check the
-patches against it (``tests/site/test_server_patches.py`` names every private part they use),
-then move these pins and the lock together.
+against (this package's modules and ``install``, and ``cyborg_site.drain``; each says why it is
+there, ``docs/performance.md`` what it saves). Another release may have changed what they touch,
+so the server refuses to start on one: check the patches against it
+(``tests/site/test_server_patches.py`` names every private part they use), then move these pins
+and the lock together.
 """
 
 from __future__ import annotations
@@ -22,4 +22,4 @@ def refuse_other_releases() -> None:
     others = other_releases()
     if others:
         found = ", ".join(f"{name} {v} (the patches are for {PATCHED_RELEASES[name]})" for name, v in others.items())
-        raise RuntimeError(f"The server patches do not know {found}: see cyborg_site/server_versions.py.")
+        raise RuntimeError(f"The server patches do not know {found}: see cyborg_site/server_patches/releases.py.")
