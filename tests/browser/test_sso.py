@@ -42,6 +42,13 @@ def sign_in(page, stack: Stack, username: str, *, next_path: str = "/") -> None:
     page.get_by_role("button", name="Sign in").click()
 
 
+def refused(page, stack: Stack, why: str) -> None:
+    """The refusal page says why, and the person is not logged in."""
+    expect(page.get_by_role("alert")).to_contain_text(why)
+    page.goto(f"{stack.url}/")
+    page.wait_for_url(f"{stack.url}/accounts/login/?next=/")
+
+
 def test_an_operator_signs_in_and_drives(browser, sso_stack):
     stack, _ = sso_stack
     with fresh_page(browser) as page:
@@ -72,9 +79,7 @@ def test_a_person_in_no_mapped_group_is_refused(browser, sso_stack):
     stack, _ = sso_stack
     with fresh_page(browser) as page:
         sign_in(page, stack, "nils")
-        expect(page.get_by_role("alert")).to_contain_text("is not in a group that may use the Cyborg")
-        page.goto(f"{stack.url}/")
-        page.wait_for_url(f"{stack.url}/accounts/login/?next=/")
+        refused(page, stack, "is not in a group that may use the Cyborg")
 
 
 def test_a_rotated_signing_key_is_survived_and_logout_ends_both_sessions(browser, sso_stack):
@@ -86,7 +91,6 @@ def test_a_rotated_signing_key_is_survived_and_logout_ends_both_sessions(browser
         page.context.clear_cookies()
         sign_in(page, stack, "kari")
         page.wait_for_url(f"{stack.url}/")
-        page.on("framenavigated", lambda frame: print("NAV", frame.url))
         page.get_by_role("button", name="Log out").click()
         page.wait_for_url(f"{stack.url}/accounts/login/**")
         page.get_by_role("link", name="Sign in with Feide").click()
@@ -99,9 +103,7 @@ def test_a_broken_id_token_is_refused(browser, sso_stack, mischief):
     with fresh_page(browser) as page:
         provider.misbehave(mischief)
         sign_in(page, stack, "kari")
-        expect(page.get_by_role("alert")).to_contain_text("could not be verified")
-        page.goto(f"{stack.url}/")
-        page.wait_for_url(f"{stack.url}/accounts/login/?next=/")
+        refused(page, stack, "could not be verified")
 
 
 def test_a_replayed_callback_is_refused(browser, sso_stack):
@@ -114,4 +116,4 @@ def test_a_replayed_callback_is_refused(browser, sso_stack):
         page.get_by_role("button", name="Log out").click()
         page.wait_for_url(f"{stack.url}/accounts/login/**")
         page.goto(callbacks[0])
-        expect(page.get_by_role("alert")).to_contain_text("could not be verified")
+        refused(page, stack, "could not be verified")
