@@ -143,7 +143,7 @@ class OidcProvider:
 
     def misbehave(self, mischief: str) -> None:
         """The token endpoint's next ID token is broken: ``tampered`` (a claim changed after signing),
-        ``wrong_audience``, ``wrong_issuer``, ``expired``, ``unknown_key`` (signed by a key never
+        ``wrong_audience``, ``wrong_issuer``, ``expired``, ``wrong_nonce``, ``unknown_key`` (signed by a key never
         published) or ``no_id_token``."""
         self._control("POST", "misbehave", body={"mischief": mischief})
 

@@ -70,7 +70,7 @@ def set_groups(request: HttpRequest, username: str) -> HttpResponse:
     return JsonResponse({"groups": user["groups"]})
 
 
-MISCHIEF = ("tampered", "wrong_audience", "wrong_issuer", "expired", "unknown_key", "no_id_token")
+MISCHIEF = ("tampered", "wrong_audience", "wrong_issuer", "expired", "wrong_nonce", "unknown_key", "no_id_token")
 _next_mischief: list[str] = []
 
 
@@ -108,7 +108,7 @@ def _broken(id_token: str, mischief: str) -> str | None:
         key = jwk.JWK.generate(kty="RSA", size=2048)
     # (The wrong audience names the client as its authorised party: the audience alone must refuse it.)
     changed = {"wrong_audience": {"aud": "another-client", "azp": settings.SPEC["client"]["client_id"]},
-               "wrong_issuer": {"iss": "http://127.0.0.1:1/o"},
+               "wrong_issuer": {"iss": "http://127.0.0.1:1/o"}, "wrong_nonce": {"nonce": "from-another-sign-in"},
                "expired": {"iat": int(time.time()) - 3600, "exp": int(time.time()) - 600}}.get(mischief, {})
     token = jwt.JWT(header={"alg": "RS256", "kid": key.thumbprint()}, claims={**claims, **changed})
     token.make_signed_token(key)

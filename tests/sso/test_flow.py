@@ -157,7 +157,7 @@ def test_a_replayed_callback_is_refused(provider):
 
 @pytest.mark.parametrize(("mischief", "why"), [
     ("tampered", "bad_signature"), ("wrong_audience", "Invalid claim: 'aud'"), ("wrong_issuer", "Invalid claim: 'iss'"),
-    ("expired", "expired"), ("unknown_key", "No key for kid"), ("no_id_token", "no ID token"),
+    ("expired", "expired"), ("wrong_nonce", "nonce"), ("unknown_key", "No key for kid"), ("no_id_token", "no ID token"),
 ])
 def test_a_broken_or_forged_id_token_is_refused(provider, mischief, why):
     kari = Person(provider, "kari")
