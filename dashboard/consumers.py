@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import asyncio
+import logging
 from collections.abc import Iterable
 from typing import Any
 
@@ -24,7 +26,11 @@ from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
 from robot.live.state import get_store
 from robot.live.topicwatch import TopicRefused, local_watches
 
+log = logging.getLogger(__name__)
+
 UNAUTHENTICATED = 4401
+# How soon a viewer stops getting a topic an admin has just marked sensitive.
+RECHECK_S = 2.0
 
 
 def _topic_names(key: str) -> list[str]:
@@ -61,6 +67,8 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         await self.base_send({"type": "websocket.send", "text": text})
 
     async def disconnect(self, code: int) -> None:
+        if getattr(self, "_rechecking", None) is not None:
+            self._rechecking.cancel()
         if hasattr(self, "socket"):
             self.hub.detach(self.socket)
             await local_watches().drop(self.socket)
@@ -95,6 +103,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if new:
             await self._hold_upstream([*self.socket.keys, *new])
         await self._snapshot(new)
+        self._keep_rechecking()
 
     async def _unwatch(self, keys: Any) -> None:
         if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
@@ -135,6 +144,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if first and key not in self.socket.pending:  # else a live value is already on its way
             await self._snapshot([key])
         await self.send_json({"kind": "watching", "topic": name, "key": key})
+        self._keep_rechecking()
 
     async def _unwatch_topic(self, name: Any) -> None:
         if not isinstance(name, str):
@@ -150,6 +160,35 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if not topics or (roles_cached(user) and is_operator(user)):
             return []
         return await database_sync_to_async(refused_topics)(user, topics)
+
+    def _keep_rechecking(self) -> None:
+        user = self.scope["user"]
+        if roles_cached(user) and is_operator(user):
+            return
+        if getattr(self, "_rechecking", None) is None or self._rechecking.done():
+            self._rechecking = asyncio.ensure_future(self._recheck())
+
+    async def _recheck(self) -> None:
+        """While this person watches robot topics: every ``RECHECK_S``, end the watches of those an
+        admin has since marked sensitive (a watch is checked when it starts; this is for later)."""
+        while self.socket.keys:
+            await asyncio.sleep(RECHECK_S)
+            shows = {key: [key.removeprefix(ECHO_PREFIX)] if is_echo_key(key) else _topic_names(key)
+                     for key in self.socket.keys}
+            try:
+                refused = set(await database_sync_to_async(refused_topics)(
+                    self.scope["user"], [t for names in shows.values() for t in names], max_age_s=RECHECK_S / 2))
+            except Exception:  # the database is away: look again next time
+                log.warning("could not look again at the sensitive topics", exc_info=True)
+                continue
+            for key, names in shows.items():
+                for name in refused.intersection(names):
+                    if is_echo_key(key):
+                        await self._unwatch_topic(name)
+                    else:
+                        await self._unwatch([key])
+                    await self.send_json({"kind": "error", "code": "forbidden", "topic": name, "key": key,
+                                          "message": refusal(name)})
 
     async def _snapshot(self, keys: list[str]) -> None:
         """Watch ``keys`` and queue their stored values, never older than a live update already queued."""

@@ -4,6 +4,8 @@ topic's messages: the topics page, history, plots and exports."""
 
 from __future__ import annotations
 
+import threading
+import time
 from typing import Any
 
 from django.db.models import Q
@@ -18,11 +20,27 @@ def sensitive_topics() -> set[str]:
     return {*recorded.values_list("topic", flat=True), *(t.name for t in ri.topics() if t.type in ri.SOUND_TYPES)}
 
 
-def refused_topics(user: Any, topics: list[str]) -> list[str]:
-    """Those of ``topics`` that ``user`` may not read (a query only for a non-operator)."""
+_recent: tuple[float, set[str]] = (float("-inf"), set())
+_recent_lock = threading.Lock()
+
+
+def recent_sensitive_topics(max_age_s: float) -> set[str]:
+    """``sensitive_topics()`` as this process read it at most ``max_age_s`` ago (one query a while
+    for all the open sockets that look again)."""
+    global _recent
+    with _recent_lock:
+        read_at, topics = _recent
+        if time.monotonic() - read_at > max_age_s:
+            _recent = (time.monotonic(), topics := sensitive_topics())
+        return topics
+
+
+def refused_topics(user: Any, topics: list[str], *, max_age_s: float = 0.0) -> list[str]:
+    """Those of ``topics`` that ``user`` may not read (a query only for a non-operator, none when
+    this process read the sensitive topics less than ``max_age_s`` ago)."""
     if is_operator(user):
         return []
-    sensitive = sensitive_topics()
+    sensitive = recent_sensitive_topics(max_age_s) if max_age_s else sensitive_topics()
     return [topic for topic in topics if topic in sensitive]
 
 

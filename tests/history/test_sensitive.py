@@ -3,6 +3,7 @@ history, plots, exports and on the topics page; operators read them as before.""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import time
 
@@ -85,3 +86,26 @@ async def test_a_viewer_cannot_watch_a_marked_topic_on_the_topics_page(link, sim
     await operators.send_json_to({"action": "watch_topic", "topic": name})
     await receive_until(operators, lambda f: f.get("kind") == "watching", timeout=10)
     await operators.disconnect()
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_a_viewer_watching_a_topic_stops_getting_it_once_an_admin_marks_it_sensitive(link, sim, viewer):
+    from dashboard.consumers import RECHECK_S
+    from robot.link.watching import echo_key
+
+    name, key = ri.topic("tf").name, echo_key(ri.topic("tf").name)
+    page = ws_communicator(viewer)
+    assert (await page.connect(timeout=10))[0]
+    await page.send_json_to({"action": "watch_topic", "topic": name})
+    await receive_until(page, lambda f: f.get("kind") == "update" and f.get("key") == key, timeout=10)
+    await database_sync_to_async(TopicPolicy.objects.create)(topic=name, msg_type="tf2_msgs/TFMessage",
+                                                             sensitive=True)
+    refusal = await receive_until(page, lambda f: f.get("kind") == "error", timeout=RECHECK_S * 2 + 5)
+    assert (refusal["code"], refusal["topic"]) == ("forbidden", name) and "operators only" in refusal["message"]
+    await asyncio.sleep(1.5)  # tf goes on at 10 Hz at the robot
+    later = []
+    while not await page.receive_nothing(timeout=0.1):
+        frame = await page.receive_json_from()
+        later.extend(frame.get("updates", [frame]))
+    assert [f for f in later if f.get("key") == key] == []
+    await page.disconnect()
