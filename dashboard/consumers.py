@@ -45,6 +45,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
 
     channel_layer_alias = "none"  # not configured: this consumer gets no per-socket channel
     db_free_types = frozenset({"websocket.connect", "websocket.receive", "websocket.disconnect"})
+    _rechecking: asyncio.Future | None = None
 
     async def connect(self) -> None:
         user = self.scope.get("user")
@@ -67,7 +68,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         await self.base_send({"type": "websocket.send", "text": text})
 
     async def disconnect(self, code: int) -> None:
-        if getattr(self, "_rechecking", None) is not None:
+        if self._rechecking is not None:
             self._rechecking.cancel()
         if hasattr(self, "socket"):
             self.hub.detach(self.socket)
@@ -165,7 +166,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         user = self.scope["user"]
         if roles_cached(user) and is_operator(user):
             return
-        if getattr(self, "_rechecking", None) is None or self._rechecking.done():
+        if self._rechecking is None or self._rechecking.done():
             self._rechecking = asyncio.ensure_future(self._recheck())
 
     async def _recheck(self) -> None:
