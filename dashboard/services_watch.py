@@ -16,7 +16,7 @@ from django.db import connection
 
 from dashboard.health import CHECKS, Check
 from robot.live.hub import Hub
-from robot.supervisor import end_if_cancelled, supervise
+from robot.supervisor import supervise
 
 EVERY_S = 1.0
 CHECK_TIMEOUT_S = 2.0
@@ -50,7 +50,6 @@ def down_services() -> dict[str, str]:
 async def watch(hub: Hub) -> None:
     loop = asyncio.get_running_loop()
     while True:
-        end_if_cancelled()
         try:
             down = await asyncio.wait_for(loop.run_in_executor(_executor, down_services), CHECK_TIMEOUT_S)
         except TimeoutError:

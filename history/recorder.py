@@ -24,7 +24,6 @@ from history.models import Mode
 from history.policies import Policy, load_policies
 from history.sampling import is_due, latest_key
 from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
-from robot.supervisor import end_if_cancelled
 
 log = logging.getLogger(__name__)
 
@@ -204,7 +203,6 @@ class Recorder:
         next_reload = 0.0
         try:
             while True:
-                end_if_cancelled()  # to the final flush below, even if a store write lost the cancellation
                 if time.monotonic() >= next_reload:
                     await self.reload(link)
                     next_reload = time.monotonic() + settings.HISTORY_POLICY_RELOAD_S

@@ -22,7 +22,6 @@ from django.db import transaction
 from history.models import Mode, TopicPolicy
 from history.policies import load_policies
 from history.storage import FailureLog, Pending, encode, in_thread, write_rows
-from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -86,7 +85,6 @@ async def run_schedule(link: Any) -> None:
     next_prune = time.monotonic() + settings.HISTORY_SAMPLE_TICK_S
     failures = FailureLog("periodic sampling and pruning")
     while True:
-        end_if_cancelled()
         started = time.monotonic()
         try:
             await in_thread(sample_periodic, store=link.store)
@@ -94,8 +92,6 @@ async def run_schedule(link: Any) -> None:
                 next_prune = started + settings.HISTORY_PRUNE_EVERY_S
                 await in_thread(prune_expired)
             failures.ok()
-        except Exception as exc:
-            if stop_requested():
-                raise asyncio.CancelledError from exc
+        except Exception:
             failures.failed()
         await asyncio.sleep(max(0.05, settings.HISTORY_SAMPLE_TICK_S - (time.monotonic() - started)))

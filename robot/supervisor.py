@@ -3,8 +3,8 @@
 ``supervise(name, factory)`` runs ``factory()`` in a task; when it raises, the exception is
 logged with its traceback and the task starts again after a backoff that doubles up to a
 ceiling (and starts small again once a run lasted a while). A task that returns has finished
-its work; a cancelled one stops. ``health()`` is what health reports: every supervised task
-of this process with its state, restarts and last error.
+its work; a cancelled one stops (``cancel_and_wait``: several, in bounded time). ``health()`` is
+what health reports: every supervised task of this process with its state, restarts and last error.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Collection
 from dataclasses import asdict, dataclass
 
 log = logging.getLogger(__name__)
@@ -33,22 +33,6 @@ class TaskHealth:
 
 
 _tasks: dict[str, TaskHealth] = {}
-
-
-def stop_requested() -> bool:
-    """True once the running task has been cancelled, even when a library (a Redis client in the
-    middle of a read) turned the CancelledError into an error of its own: a loop that catches
-    errors and carries on must stop then, or the task never ends and neither does its event loop."""
-    task = asyncio.current_task()
-    return task is not None and task.cancelling() > 0
-
-
-def end_if_cancelled() -> None:
-    """End the running task if it was cancelled, for a loop to call each round: Python 3.11's
-    ``wait_for`` (inside redis-py's writes, for one) can return normally in a task cancelled just
-    then, the cancellation lost, and the loop would go on for ever."""
-    if stop_requested():
-        raise asyncio.CancelledError
 
 
 def supervise(
@@ -76,7 +60,10 @@ def supervise(
                     health.state = "finished"
                     raise
                 except Exception as exc:
-                    if stop_requested():
+                    # Cancelled, but a clean-up that failed on the way out (an ``except`` or ``finally``
+                    # calling Redis or the database while it is down) raised in the CancelledError's
+                    # place: restarted, the task would outlive its stop and keep its event loop open.
+                    if (task := asyncio.current_task()) is not None and task.cancelling():
                         health.state = "finished"
                         raise asyncio.CancelledError from exc
                     if time.monotonic() - started >= STABLE_AFTER_S:
@@ -90,7 +77,21 @@ def supervise(
             if transient and _tasks.get(name) is health:
                 del _tasks[name]
 
-    return asyncio.ensure_future(run())
+    task = asyncio.ensure_future(run())
+    task.set_name(name)  # named where a stop reports it still running
+    return task
+
+
+async def cancel_and_wait(tasks: Collection[asyncio.Future], timeout: float) -> None:
+    """Cancel ``tasks`` and wait at most ``timeout`` for them to end, so a stop (zero the robot, flush,
+    hand over) goes on in bounded time: a task cancelled during a database write in a worker thread
+    ends only after the write (``history.storage.in_thread``), and that may be frozen."""
+    for task in tasks:
+        task.cancel()
+    if tasks:
+        _, running = await asyncio.wait(tasks, timeout=timeout)
+        if running:
+            log.warning("%d task(s) still running %g s after being cancelled: %s", len(running), timeout, running)
 
 
 def health() -> dict[str, dict[str, object]]:

@@ -67,12 +67,3 @@ def ws_communicator(user, path: str = "/ws/live/"):
     if user is not None:
         communicator.scope["user"] = user
     return communicator
-
-
-async def lose_cancellation(seconds: float = 0.2) -> None:
-    """Wait ``seconds`` and return normally even if cancelled meanwhile, as Python 3.11's ``wait_for``
-    (inside redis-py's writes) can in a task cancelled at that moment: a stand-in for such a call."""
-    try:
-        await asyncio.sleep(seconds)
-    except asyncio.CancelledError:
-        pass

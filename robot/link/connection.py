@@ -21,7 +21,6 @@ from urllib.parse import urlsplit
 import roslibpy
 
 from robot import interface as ri
-from robot.bounded import cancel_within, within
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
 from robot.link.rosclient import LinkRos, call_service, close_quietly
@@ -39,7 +38,7 @@ from robot.live.groups import (
 )
 from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S, StateStore
-from robot.supervisor import end_if_cancelled, failing, supervise
+from robot.supervisor import cancel_and_wait, failing, supervise
 
 if TYPE_CHECKING:
     from robot.link.lease import Lease
@@ -206,7 +205,7 @@ class RobotLink:
                 if self.request_queue:
                     await self._wake_list_pop()
                 else:
-                    await within(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
+                    await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
             except Exception:
                 log.warning("could not tell the robot link's request loop to stop", exc_info=True)
             # The loop ends at the stop message, or after its current pop (a Redis list pop returns
@@ -217,13 +216,13 @@ class RobotLink:
                 log.warning("robot link request loop did not stop in time")
         if self._inflight:
             await asyncio.wait(set(self._inflight), timeout=2)  # answer what it took while the robot is there
-        await cancel_within(self._tasks, 2)
+        if self._coalescer is not None:
+            self._coalescer.close()  # ends its sender
+            self._tasks.append(self._coalescer._task)
+        await cancel_and_wait([*self._tasks, *self._inflight], 2)
         self._tasks.clear()
         if self.guard is not None:
             self.guard.stop()  # zero before the connection goes, if the robot may be moving
-        if self._coalescer is not None:
-            await cancel_within([self._coalescer._task], 1)
-            self._coalescer.close()
         if self.ros is not None:
             ros, self.ros = self.ros, None
             for topic in list(self._subscriptions.values()):
@@ -231,15 +230,14 @@ class RobotLink:
             ros.factory.stopTrying()
             if ros.is_connected:
                 try:
-                    await within(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
+                    await asyncio.wait_for(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
                 except TimeoutError:
                     log.warning("the rosbridge connection did not close in time; going on")
-        await cancel_within(list(self._inflight), 1)
         self.connected = False
 
     async def _wake_list_pop(self) -> None:
         try:
-            await within(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
+            await asyncio.wait_for(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
         except Exception:
             log.debug("could not wake the request loop; it stops after its current pop", exc_info=True)
 
@@ -391,7 +389,6 @@ class RobotLink:
     async def _heartbeat(self) -> None:
         while not self._stopped:
             await asyncio.sleep(LINK_HEARTBEAT_S)
-            end_if_cancelled()
             # Failed connection attempts emit no "close"; count them from the factory.
             if self.ros is not None and not self.connected:
                 self.attempts = max(self.attempts, getattr(self.ros.factory, "retries", 0))
@@ -476,7 +473,6 @@ class RobotLink:
 
     async def _serve(self) -> None:
         while not self._stopped:
-            end_if_cancelled()
             if self.request_queue:
                 request = await redisqueue.pop(self.request_queue)
                 if request is None:

@@ -16,14 +16,13 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from cyborg_site.drain import daphne_reactor
-from robot.bounded import cancel_within, within
 from robot.link import connection as link_module
 from robot.link import direct, redisqueue
 from robot.link.bus import aping_over_layer
 from robot.link.connection import RobotLink
 from robot.link.lease import Lease
 from robot.live.state import get_store
-from robot.supervisor import end_if_cancelled, supervise
+from robot.supervisor import cancel_and_wait, supervise
 
 log = logging.getLogger(__name__)
 
@@ -76,7 +75,7 @@ async def start_link(
 async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: float = 4.0) -> None:
     """Stop the background services first and let them finish (the recorder flushes), then the link."""
     started = time.monotonic()
-    await cancel_within(tasks, timeout)
+    await cancel_and_wait(tasks, timeout)
     services_done = time.monotonic()
     await link.stop()
     log.info("robot link stopped: background services in %.2f s, then the link in %.2f s",
@@ -89,7 +88,6 @@ async def probe_command_path(link: RobotLink) -> None:
     """Ping the link over the request channel every web process uses, and say what it found
     in the link's status: a dead request loop or channel layer shows as "command path down"."""
     while True:
-        end_if_cancelled()
         await link.set_command_path(await aping_over_layer(PROBE_TIMEOUT_S))
         await asyncio.sleep(PROBE_INTERVAL_S)
 
@@ -112,7 +110,7 @@ def _stop_robot_before_exit() -> object:
 
     async def stop() -> None:
         try:
-            stopped = await within(halt_all(), 2)
+            stopped = await asyncio.wait_for(halt_all(), 2)
             if stopped:
                 log.warning("shutting down: sent zero for %d driver(s)", stopped)
         except Exception:

@@ -22,7 +22,6 @@ from redis.asyncio.lock import Lock
 from redis.exceptions import LockError, LockNotOwnedError, RedisError
 
 from robot.live import redis_clients
-from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +53,6 @@ class Lease:
     async def acquire(self) -> None:
         """Wait (as the standby) until this process holds the lease."""
         while True:
-            end_if_cancelled()
             if self._redis_down:
                 # Redis is back, maybe empty after a restart: leave the holder a lease's time to take its
                 # key back, so a Redis restart does not move the robot to the other link.
@@ -72,9 +70,7 @@ class Lease:
                     self.acquired_at = time.time()
                     log.info("robot link %s holds the lease", self.holder)
                     return
-            except RedisError as exc:
-                if stop_requested():
-                    raise asyncio.CancelledError from exc
+            except RedisError:
                 self._redis_failed()
             await asyncio.sleep(self.poll_s)
 
@@ -82,7 +78,6 @@ class Lease:
         """Renew the lease until it is lost; returns then (``lost`` is set)."""
         while not self.lost.is_set():
             await asyncio.sleep(self.renew_s)
-            end_if_cancelled()
             started = time.monotonic()
             try:
                 await self.lock.reacquire()
@@ -92,9 +87,7 @@ class Lease:
                 # Gone (expired, or Redis restarted empty) or taken. Take it back only if nobody has it.
                 if not await self._retake(started):
                     self._lose("another link holds it")
-            except RedisError as exc:
-                if stop_requested():
-                    raise asyncio.CancelledError from exc
+            except RedisError:
                 self._redis_failed()
                 if time.monotonic() >= self._valid_until:
                     await self._await_redis()
@@ -106,7 +99,6 @@ class Lease:
                   "until Redis returns", self.holder)
         while True:
             await asyncio.sleep(self.poll_s)
-            end_if_cancelled()
             started = time.monotonic()
             try:
                 if await self.lock.owned() or await self.lock.do_acquire(self.token):

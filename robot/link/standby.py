@@ -20,7 +20,6 @@ import roslibpy
 from django.conf import settings
 
 from robot import interface as ri
-from robot.bounded import within
 from robot.link import direct
 from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live.groups import LinkReply, LinkRequest
@@ -51,7 +50,7 @@ class StandbyStop:
             ros.factory.stopTrying()
             if ros.is_connected:
                 with contextlib.suppress(TimeoutError):
-                    await within(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
+                    await asyncio.wait_for(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
 
     async def answer(self, request: LinkRequest) -> LinkReply:
         reply = await self._stop(request)

@@ -15,8 +15,6 @@ from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from robot.supervisor import end_if_cancelled
-
 log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
@@ -93,9 +91,7 @@ class Coalescer:
         self._wake.set()
 
     async def _drain(self) -> None:
-        # Exit on a flag, not only on cancellation: a send through redis-py may turn a cancel into
-        # a ConnectionError, which the error handling below would swallow, or lose it altogether.
-        while not self._closed:
+        while not self._closed:  # until close(), which also cancels it
             await self._wake.wait()
             self._wake.clear()
             while self._outbox and not self._closed:
@@ -104,7 +100,6 @@ class Coalescer:
                     await self._send(value)
                 except Exception:
                     log.exception("fan-out send failed")
-                end_if_cancelled()
 
     def close(self) -> None:
         self._closed = True

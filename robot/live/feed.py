@@ -23,7 +23,6 @@ from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
 from robot.live.state import get_store, redis_key
-from robot.supervisor import end_if_cancelled, stop_requested
 
 log = logging.getLogger(__name__)
 
@@ -113,14 +112,12 @@ async def run_subscriber(hub: Hub) -> None:
     subscribed_before = False
     lost_at: float | None = None
     while True:
-        end_if_cancelled()
         # No socket timeout: the subscription waits as long as nothing is published.
         client = redis_clients.new_aclient(client_name=SUBSCRIBER_NAME, socket_timeout=None)
         try:
             async with client.pubsub() as pubsub:
                 await pubsub.subscribe(channel())
                 async for message in pubsub.listen():
-                    end_if_cancelled()
                     kind = message.get("type")
                     if kind == "message":
                         try:
@@ -135,9 +132,7 @@ async def run_subscriber(hub: Hub) -> None:
                             await _refresh(hub, delivered, since=(lost_at or time.time()) - GAP_MARGIN_S)
                         subscribed_before, lost_at = True, None
                         _ready.setdefault(hub, asyncio.Event()).set()
-        except Exception as exc:
-            if stop_requested():
-                raise asyncio.CancelledError from exc
+        except Exception:
             lost_at = lost_at or time.time()
             log.warning("live update subscription lost; resubscribing in %g s", RETRY_S, exc_info=True)
             await asyncio.sleep(RETRY_S)

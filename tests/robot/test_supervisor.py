@@ -57,19 +57,39 @@ async def test_a_transient_task_leaves_health_when_it_ends():
     assert "test.once" not in supervisor.health()
 
 
-async def test_a_cancel_that_a_library_turns_into_its_own_error_still_stops_the_task():
+async def test_a_cancelled_task_whose_clean_up_fails_stops_all_the_same():
     started = asyncio.Event()
 
     async def reads_from_redis():
         started.set()
         try:
             await asyncio.sleep(3600)
-        except asyncio.CancelledError as exc:  # as a client library may do mid-read
-            raise ConnectionError("connection closed while reading") from exc
+        finally:  # a clean-up that fails on the way out, Redis being down: its error replaces the cancel
+            raise ConnectionError("Error connecting to 127.0.0.1:6379")
 
-    task = supervisor.supervise("test.swallowed-cancel", reads_from_redis)
+    task = supervisor.supervise("test.failed-clean-up", reads_from_redis)
     await started.wait()
     task.cancel()
     done, _ = await asyncio.wait({task}, timeout=3)
     assert task in done and task.cancelled()
-    assert supervisor.health()["test.swallowed-cancel"]["state"] == "finished"
+    assert supervisor.health()["test.failed-clean-up"]["state"] == "finished"
+
+
+async def test_cancel_and_wait_waits_no_longer_than_told_and_names_what_still_runs(caplog):
+    async def write_then_end() -> None:  # as history.storage.in_thread: its database write ends first
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError:
+            await asyncio.sleep(0.5)
+            raise
+
+    quick = asyncio.ensure_future(asyncio.sleep(3600))
+    slow = supervisor.supervise("test.slow-to-end", write_then_end)
+    await asyncio.sleep(0)
+    with caplog.at_level(logging.WARNING, logger="robot.supervisor"):
+        await supervisor.cancel_and_wait([quick, slow], 0.1)
+    assert quick.cancelled() and not slow.done(), "it waited for the slow one"
+    assert "1 task(s) still running 0.1 s after being cancelled" in caplog.text and "test.slow-to-end" in caplog.text
+    await asyncio.wait({slow}, timeout=2)
+    assert slow.cancelled()
+    supervisor.forget("test.slow-to-end")

@@ -1,4 +1,5 @@
 import asyncio
+import io
 import logging
 import os
 import signal
@@ -12,13 +13,12 @@ from typing import Any
 from django.conf import settings
 from django.core.management.base import BaseCommand
 
-from robot.bounded import cancel_within, describe
 from robot.link import direct
 from robot.link.hosting import start_link, stop_link
 from robot.link.lease import Lease
 from robot.link.standby import StandbyStop
 from robot.live.state import redis_key
-from robot.supervisor import supervise
+from robot.supervisor import cancel_and_wait, supervise
 
 LEASE_KEY = "link-lease"
 RETRY_AFTER_FAILURE_S = 1.0
@@ -93,7 +93,7 @@ class Command(BaseCommand):
                 await stop_link(link, tasks)
             finally:
                 if renewing is not None:
-                    await cancel_within([renewing], 1)
+                    await cancel_and_wait([renewing], 1)
                     await lease.release()
 
 
@@ -105,19 +105,24 @@ async def _standing_by(lease: Lease) -> None:
     try:
         await lease.acquire()
     finally:
-        await cancel_within([stopper], 3)
+        await cancel_and_wait([stopper], 3)
 
 
 def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:
-    """Past ``seconds``: every thread's stack and every task's on ``loop`` to the log, then exit, rather
-    than be killed without a word."""
+    """Past ``seconds``: every thread's stack and every task's on ``loop`` to the log, then exit. The stop's
+    waits are bounded but can add up past the deadline (Redis frozen during the hand-over), and no timeout
+    in the loop ends a call that blocks it or a hung worker thread (a rosbridge close, a database write)
+    that the interpreter waits for at exit; a process manager would kill it later, without a word."""
 
     def overran() -> None:
         names = {thread.ident: thread.name for thread in threading.enumerate()}
         stacks = "".join(f"\nThread {names.get(ident, ident)}:\n{''.join(traceback.format_stack(frame))}"
                          for ident, frame in sys._current_frames().items())
-        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s\nWhat each task awaited:%s",
-                  seconds, stacks, describe(asyncio.all_tasks(loop)))
+        tasks = io.StringIO()
+        for task in asyncio.all_tasks(loop):
+            task.print_stack(file=tasks)
+        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s\nWhat each task awaited:\n%s",
+                  seconds, stacks, tasks.getvalue())
         sys.stdout.flush()
         os._exit(1)
 
@@ -127,10 +132,11 @@ def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) ->
 
 
 async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
-    """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first."""
+    """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first. A stop ends only
+    such waits: cancelling the whole command could cut short a stop of the link already under way."""
     main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
     done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)
-    await cancel_within(pending, 2)
+    await cancel_and_wait(pending, 2)
     if main_task in done:
         main_task.result()  # its error, if it failed, is the caller's
         return True
