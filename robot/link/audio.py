@@ -25,7 +25,9 @@ import roslibpy
 
 from robot import interface as ri
 from robot.audio.mic import DecodeError, Mp3Decoder, PcmRelay, Unplayable, decoder_for, playback_format
-from robot.link.connection import RobotLink, one_per_link, register_handler, register_operation
+from robot.link.connection import RobotLink, one_per_link
+from robot.link.serving import register_operation
+from robot.link.subscriptions import register_handler
 from robot.live.groups import MIC_GROUP, LinkReply, LinkRequest, SharedMessage
 
 log = logging.getLogger(__name__)

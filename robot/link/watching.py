@@ -27,7 +27,8 @@ import numpy as np
 from django.conf import settings
 
 from robot import interface as ri
-from robot.link.connection import RobotLink, one_per_link, register_operation, register_start
+from robot.link.connection import RobotLink, one_per_link, register_start
+from robot.link.serving import register_operation
 from robot.live.announce import aannounce
 from robot.live.fanout import Coalescer
 from robot.live.groups import LinkReply, LinkRequest, TopicUpdate

@@ -14,9 +14,9 @@ from collections.abc import Coroutine
 from typing import Any
 
 from robot import interface as ri
-from robot.link import connection as link_module
 from robot.link.connection import RobotLink
 from robot.link.hosting import register_background
+from robot.link.subscriptions import register_handler
 from robot.live.announce import aget_state, apublish_state
 from robot.live.groups import GOAL_STATUS_KEY, MAP_META_KEY
 from robot.navigation.mapimage import MapError, RenderedMap, map_dir, render_map
@@ -66,7 +66,7 @@ async def _render_and_publish(msg: dict[str, Any], t: float, seq: int) -> None:
     await apublish_state(MAP_META_KEY, map_meta(rendered, msg, t), t)
 
 
-link_module.register_handler("map", on_map, arrays=True)
+register_handler("map", on_map, arrays=True)
 
 
 # --- goal statuses ---------------------------------------------------------------------------

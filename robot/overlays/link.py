@@ -19,6 +19,7 @@ from django.urls import reverse
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link.connection import RobotLink
+from robot.link.subscriptions import register_handler
 from robot.live.announce import apublish_state
 from robot.live.fanout import Coalescer
 from robot.live.groups import (
@@ -156,10 +157,10 @@ overlays = Overlays()
 def install() -> None:
     """Route the overlay topics to their handlers (wherever the link may run)."""
     for topic_key in SHAPES:
-        link_module.register_handler(topic_key, overlays.on_shape)
+        register_handler(topic_key, overlays.on_shape)
     for layer, (costmap_key, updates_key) in COSTMAPS.items():
-        link_module.register_handler(costmap_key, overlays.on_costmap(layer), arrays=True)
-        link_module.register_handler(updates_key, overlays.on_costmap_update(layer), arrays=True)
+        register_handler(costmap_key, overlays.on_costmap(layer), arrays=True)
+        register_handler(updates_key, overlays.on_costmap_update(layer), arrays=True)
     link_module.register_start(_listen_from_the_start)
 
 

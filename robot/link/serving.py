@@ -1,0 +1,173 @@
+"""Requests to the link from web processes and tasks: the request loop, the replies, and the
+last checks before the robot (the lease's fencing, the E-STOP latch)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Awaitable, Callable
+from typing import TYPE_CHECKING, Any, cast
+
+import roslibpy
+
+from robot import interface as ri
+from robot.link import redisqueue
+from robot.link.core import RECONNECT_INTERVAL_S
+from robot.link.rosclient import call_service
+from robot.link.subscriptions import Subscriptions
+from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, LinkReply, LinkRequest
+
+if TYPE_CHECKING:
+    from robot.link.connection import RobotLink
+
+log = logging.getLogger(__name__)
+
+REPLY_MARGIN_S = 0.3
+_NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "estop_release"})  # answered at once
+
+# Extra link operations other modules add (e.g. robot/link/audio.py): (link, request) -> reply.
+Operation = Callable[["RobotLink", LinkRequest], Awaitable[LinkReply]]
+_operations: dict[str, Operation] = {}
+
+
+def register_operation(op: str, operation: Operation) -> None:
+    _operations[op] = operation
+
+
+class Serving(Subscriptions):
+    async def _serve(self) -> None:
+        while not self._stopped:
+            if self.request_queue:
+                request = await redisqueue.pop(self.request_queue)
+                if request is None:
+                    continue
+            else:
+                request = await self.layer.receive(LINK_CHANNEL)
+            if request.get("type") == "link.stop":
+                if self._stopped:
+                    return
+                continue  # a stale stop message from an earlier link
+            self._spawn(self._handle(cast(LinkRequest, request)))
+
+    async def answer(self, request: LinkRequest) -> LinkReply | None:
+        """``execute`` for a request that came from another process; None if it came too late."""
+        deadline = request.get("deadline", float("inf"))
+        if deadline < time.time():
+            log.warning("dropped a %s request that arrived after its deadline", request.get("op"))
+            return None
+        # A link just started (a standby taking over) serves requests queued meanwhile once connected,
+        # or still says "offline" in time for the caller to hear it.
+        while (not self.connected and request.get("op") not in _NO_ROBOT_NEEDED
+               and time.time() < min(deadline - REPLY_MARGIN_S, self.connecting_until)):
+            await asyncio.sleep(0.02)
+        return await self.execute(request)
+
+    async def _handle(self, request: LinkRequest) -> None:
+        reply = await self.answer(request)
+        if reply is None:
+            return
+        reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
+        reply_to = request.get("reply_to") or ""
+        if reply_to.startswith(REPLY_LIST_PREFIX):
+            await redisqueue.push(reply_to.removeprefix(REPLY_LIST_PREFIX), dict(reply))
+        elif reply_to:
+            await self.layer.send(reply_to, reply)
+
+    async def execute(self, request: LinkRequest) -> LinkReply:
+        op = request.get("op")
+        if op == "reconnect":
+            wait = self._asked_reconnect_at + RECONNECT_INTERVAL_S - time.monotonic()
+            if wait > 0:
+                return {"ok": False, "error_code": "throttled",
+                        "error": f"The robot link reconnected moments ago; try again in {max(1, round(wait))} s."}
+            self._asked_reconnect_at = time.monotonic()
+            self.reconnect()
+            return {"ok": True}
+        if op == "ping":
+            return {"ok": True}
+        if op in _operations:
+            return await _operations[op](cast("RobotLink", self), request)
+        if op == "estop_release":
+            if self.guard is not None:
+                self.guard.release()
+            return {"ok": True}
+        if op == "estop" and self.guard is not None:
+            self.guard.engage()  # latched even when the robot is offline
+            self._pressed_at = max(self._pressed_at, float(request.get("at") or time.time()))
+            self._pressed_by = str(request.get("by") or self._pressed_by)
+        if not self.connected or self.ros is None or not self.ros.is_connected:
+            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if op == "publish" and self.lease is not None and not request.get("emergency"):
+            # One at a time through the fencing check's round trip to Redis, in the order they came:
+            # a driver's last Twist must not overtake the zero sent after it.
+            async with self._in_order:
+                return await self._fenced(request)
+        return await self._fenced(request)
+
+    async def _fenced(self, request: LinkRequest) -> LinkReply:
+        if self.lease is not None and not await self._fenced_ok(request):
+            # The fencing check: another link may hold the lease now; never command the robot twice.
+            return {"ok": False, "error_code": "offline",
+                    "error": "This robot link lost its lease; the other one takes over"}
+        op = request.get("op")
+        if op == "estop":
+            return {"ok": True}
+        if op == "publish":
+            refused = self._held_back(request, request["topic"], request["msg"])
+            if refused:
+                return refused
+            self._publisher(request["topic"], request["msg_type"]).publish(roslibpy.Message(request["msg"]))
+            return {"ok": True}
+        if op == "call_service":
+            return await self._call_service(request)
+        return {"ok": False, "error_code": "invalid", "error": f"Unknown link operation {op!r}"}
+
+    async def _fenced_ok(self, request: LinkRequest) -> bool:
+        """The lease still ours: proved by its token in Redis, or, for what only stops the robot, not
+        known to be lost (Redis out of reach: nobody else can hold it then)."""
+        assert self.lease is not None
+        if request.get("op") == "estop" or request.get("emergency"):
+            return self.lease.may_stop
+        return await self.lease.check()
+
+    def _held_back(self, request: LinkRequest, name: str, msg: dict[str, Any]) -> LinkReply | None:
+        """The last check before the robot: the latch, on every publish and service call."""
+        if self.guard is None:
+            return None
+        refusal = self.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")))
+        return {"ok": False, "error_code": "estop", "error": refusal} if refusal else None
+
+    def _publish_zero(self) -> None:
+        if self.ros is None or not self.ros.is_connected:
+            raise RuntimeError("robot offline")
+        if self.lease is not None and not self.lease.may_stop:
+            raise RuntimeError("this robot link no longer holds the lease")
+        cmd_vel = ri.topic("cmd_vel")
+        self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ri.ZERO_TWIST))
+
+    def _publisher(self, name: str, msg_type: str) -> roslibpy.Topic:
+        topic = self._publishers.get(name)
+        if topic is None:
+            topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
+        return topic
+
+    async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
+                   timeout: float | None = None) -> LinkReply:
+        """Call one of the robot's services from where the link runs (never blocks the loop)."""
+        if not self.connected or self.ros is None:
+            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        request: LinkRequest = {"service": service.name, "service_type": service.type, "args": args or {}}
+        if timeout is not None:
+            request["timeout"] = timeout
+        return await self._call_service(request)
+
+    async def _call_service(self, request: LinkRequest) -> LinkReply:
+        refused = self._held_back(request, request["service"], request.get("args") or {})
+        if refused:
+            return refused
+        assert self.ros is not None
+        timeout = float(request.get("timeout") or self.service_timeout_s)
+        reply = await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
+                                   timeout)
+        return cast(LinkReply, reply)

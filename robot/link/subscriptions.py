@@ -1,0 +1,126 @@
+"""The link's upstream subscriptions: one rosbridge subscription per topic however many hold it,
+and each message's way to the store and the browsers (or to a handler registered for its key)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+import time
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import roslibpy
+
+from robot import interface as ri
+from robot.link.status import ROSBRIDGE_NODE, Upkeep
+from robot.live import trace
+from robot.live.announce import aannounce
+from robot.live.groups import TopicUpdate
+
+log = logging.getLogger(__name__)
+
+# Per-key handlers replace the generic store/fan-out path (e.g. the map renderer).
+Handler = Callable[[ri.Topic, dict[str, Any], float], Awaitable[None] | None]
+
+_handlers: dict[str, Handler] = {}
+_array_keys: set[str] = set()
+# Holders of upstream subscriptions: the registry's monitored topics, and a plain subscribe
+# (kept until unsubscribed, e.g. the navigation's own topics).
+REGISTRY_HOLDER = "registry"
+PINNED_HOLDER = "pinned"
+
+
+def register_handler(key: str, handler: Handler, *, arrays: bool = False) -> None:
+    """Route ``key``'s messages to ``handler`` instead of the store and browsers (apps call this in ready()).
+
+    With ``arrays`` a large message's integer ``data`` array (a map's cells) arrives as a numpy array.
+    """
+    _handlers[key] = handler
+    if arrays:
+        _array_keys.add(key)
+    else:
+        _array_keys.discard(key)
+
+
+def array_topics() -> frozenset[str]:
+    return frozenset(ri.topic(key).name for key in _array_keys)
+
+
+class Subscriptions(Upkeep):
+    def _received(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
+        """A topic message, on the reactor thread: handled at once when that is the loop's own
+        thread (Daphne), not a self-pipe wake-up and a loop turn later."""
+        t = time.time()
+        if threading.get_ident() != self._loop_thread:
+            self._threadsafe(self._on_message, name, msg_type, msg, t)
+            return
+        try:
+            self._on_message(name, msg_type, msg, t)
+        except Exception:  # never into roslibpy's read: the connection must survive a bad message
+            log.exception("handling a message on %s failed", name)
+
+    def subscribe(self, name: str, msg_type: str, *, holder: str = PINNED_HOLDER) -> None:
+        """Hold the upstream subscription to ``name`` for ``holder``: one rosbridge subscription per
+        topic however many holders; later calls for the same topic only add the holder."""
+        if self.ros is None:
+            return
+        self._holders.setdefault(name, set()).add(holder)
+        if name in self._subscriptions:
+            return
+        topic = roslibpy.Topic(self.ros, name, msg_type)
+        topic.subscribe(lambda msg, _n=name, _t=msg_type: self._received(_n, _t, msg))
+        self._subscriptions[name] = topic
+
+    def unsubscribe(self, name: str, *, holder: str = PINNED_HOLDER) -> None:
+        """Let go of ``holder``'s hold on ``name``; the upstream subscription goes with the last holder
+        (the registry's monitored topics are always held)."""
+        holders = self._holders.get(name)
+        if holders is not None:
+            holders.discard(holder)
+            if holders:
+                return
+            del self._holders[name]
+        topic = self._subscriptions.pop(name, None)
+        if topic is not None:
+            topic.unsubscribe()
+
+    def holders(self, name: str) -> frozenset[str]:
+        return frozenset(self._holders.get(name, ()))
+
+    @property
+    def subscribed(self) -> set[str]:
+        return set(self._subscriptions)
+
+    def _on_message(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        if self._stopped:
+            return
+        if name == ri.topic("rosout").name and msg.get("name") == ROSBRIDGE_NODE:
+            self._note_refusal(str(msg.get("msg", "")))
+        for listener in self.listeners:
+            try:
+                listener(name, msg_type, msg, t)
+            except Exception:
+                log.exception("link listener failed for %s", name)
+        topic = ri.topic_by_name(name)
+        if topic is None:
+            return
+        handler = _handlers.get(topic.key)
+        if handler is not None:
+            result = handler(topic, msg, t)
+            if asyncio.iscoroutine(result):
+                self._spawn(result)
+            return
+        if trace.enabled:
+            trace.begin(topic.key, t, msg)
+        update: TopicUpdate = {
+            "type": "robot.update", "key": topic.key, "topic": name, "msg_type": msg_type, "msg": msg, "t": t,
+        }
+        assert self._coalescer is not None
+        self._coalescer.offer(topic.key, topic.ui_rate_hz, update)
+
+    async def _send_update(self, update: TopicUpdate) -> None:
+        key = update["key"]
+        if trace.enabled:
+            trace.mark(update["t"], "drain")
+        await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store)
