@@ -18,7 +18,7 @@ def install() -> None:
     from cyborg_site.server_patches.releases import refuse_other_releases
 
     refuse_other_releases()
-    # Same autobahn ordering issue as the robot link (robot/link/connection.py): without a class
+    # Same autobahn ordering issue as the robot link (robot/link/rosclient.py): without a class
     # default, browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
     WebSocketProtocol.tcpNoDelay = True
     # The live hub writes pre-encoded frames straight to each connection. It and reaping both wrap
