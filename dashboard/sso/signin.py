@@ -50,7 +50,7 @@ def sign_in(request: HttpRequest, config: SsoConfig, claims: Mapping[str, Any], 
     role = role_for(claims, config)
     if role is None:
         return refuse(request, claims, Refusal(
-            "no_role", f"Your {config.name} is not in a group that may use the Cyborg. "
+            "no_role", f"Your account at {config.name} is not in a group that may use the Cyborg. "
                        "Ask the team to add you, then sign in again."))
     try:
         user = account_for(config.issuer, claims, role)
