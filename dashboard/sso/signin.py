@@ -25,8 +25,7 @@ class Refusal:
     message: str
 
 
-def _audit(request: HttpRequest, user: Any, claims: Mapping[str, Any], *, refusal: Refusal | None = None,
-           role: str = "") -> None:
+def _audit(user: Any, claims: Mapping[str, Any], *, refusal: Refusal | None = None, role: str = "") -> None:
     params = {"sub": str(claims.get("sub", "")), "username": str(claims.get("preferred_username", "")),
               "issuer": str(claims.get("iss", ""))}
     audit_record(user=user, source="page", action="login.sso", params=params, ok=refusal is None,
@@ -36,7 +35,7 @@ def _audit(request: HttpRequest, user: Any, claims: Mapping[str, Any], *, refusa
 
 def refuse(request: HttpRequest, claims: Mapping[str, Any], refusal: Refusal) -> Refusal:
     """Audit the refusal and count it as a failed login (django-axes: forged answers lead to a lockout)."""
-    _audit(request, None, claims, refusal=refusal)
+    _audit(None, claims, refusal=refusal)
     user_login_failed.send(sender=__name__, request=request,
                            credentials={"username": str(claims.get("preferred_username", ""))})
     return refusal
@@ -58,5 +57,5 @@ def sign_in(request: HttpRequest, config: SsoConfig, claims: Mapping[str, Any], 
         return refuse(request, claims, Refusal("disabled", "Your account here has been deactivated by an admin."))
     login(request, user, backend="django.contrib.auth.backends.ModelBackend")
     request.session[ID_TOKEN_KEY] = id_token
-    _audit(request, user, claims, role=role.value)
+    _audit(user, claims, role=role.value)
     return None
