@@ -73,7 +73,8 @@ in_env() { (set -a; . "$ENV_FILE"; set +a; exec "$@"); }
 # Start NAME in its own session, output to logs/NAME.log, pid to pids/NAME.pid. As the systemd units
 # do (Restart=always, RestartSec=1), a process that dies on its own is started again a second later:
 # pids/NAME.pid is the session's keeper, pids/NAME.child the process it runs now. Stopping (or
-# killing) the whole session ends both.
+# killing) the whole session ends both. The child's pid is written beside and renamed, so a reader
+# never sees the file empty.
 start() {
   local name=$1; shift
   (set -a; . "$ENV_FILE"; set +a; exec setsid bash -c '
@@ -81,7 +82,7 @@ start() {
     trap '"'"'kill -TERM "$pid" 2>/dev/null; wait "$pid"; exit 0'"'"' TERM INT
     while :; do
       "$@" & pid=$!
-      echo "$pid" >"$child"
+      echo "$pid" >"$child.new" && mv -f "$child.new" "$child"
       wait "$pid" || true
       echo "stack.sh: $(date -Is) exited; starting it again in 1 s"
       sleep 1
