@@ -62,7 +62,7 @@ run: install
 	@trap 'kill 0' INT TERM EXIT; \
 	$(BIN)/python manage.py simrobot --port $(SIM_PORT) --video-port $(VIDEO_PORT) & \
 	ROSBRIDGE_URL='$(ROSBRIDGE_URL)' VIDEO_URL='$(VIDEO_URL)' \
-	  $(BIN)/daphne -b 127.0.0.1 -p $(PORT) cyborg_site.asgi:application
+	  $(BIN)/daphne -b 127.0.0.1 -p $(PORT) server.asgi:application
 
 test: install browser nginx
 	bash scripts/test.sh

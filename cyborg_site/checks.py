@@ -58,14 +58,3 @@ def check_secret_key(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:
 @checks.register(checks.Tags.security, deploy=True)
 def check_secret_key_for_deployment(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:
     return _errors() if settings.DEBUG else []
-
-
-@checks.register()
-def check_patched_server_releases(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:
-    """The server refuses to start on other releases (cyborg_site.asgi); say so before it does."""
-    from cyborg_site.server_patches.releases import PATCHED_RELEASES, other_releases
-
-    return [checks.Error(f"{name} {found} is installed; the server patches are for {PATCHED_RELEASES[name]}",
-                         hint="see cyborg_site/server_patches/releases.py", id="cyborg_site.E002")
-            for name, found in other_releases().items()]
-

@@ -71,6 +71,7 @@ INSTALLED_APPS = [
     "robot",
     "dashboard",
     "history",
+    "server",
 ]
 
 MIDDLEWARE = [
@@ -94,8 +95,8 @@ MIDDLEWARE = [
     "axes.middleware.AxesMiddleware",
 ]
 
-ROOT_URLCONF = "cyborg_site.urls"
-ASGI_APPLICATION = "cyborg_site.asgi.application"
+ROOT_URLCONF = "server.urls"
+ASGI_APPLICATION = "server.asgi.application"
 WSGI_APPLICATION = None
 
 TEMPLATES = [
@@ -330,6 +331,16 @@ HISTORY_SAMPLE_TICK_S = env_float("HISTORY_SAMPLE_TICK_S", 1.0, minimum=0.05)
 HISTORY_BACKLOG_SAMPLES = env_int("HISTORY_BACKLOG_SAMPLES", 2000, minimum=1)
 HISTORY_PRUNE_EVERY_S = env_float("HISTORY_PRUNE_EVERY_S", 300.0, minimum=1)
 HISTORY_MAX_POINTS = env_int("HISTORY_MAX_POINTS", 2000, minimum=10)
+# Replay and incidents: camera frames are JPEG files under CAMERA_RECORD_DIR (rows in the database index them).
+CAMERA_RECORD_DIR = Path(env_str("CAMERA_RECORD_DIR", str(VAR_DIR / "camera")))
+CAMERA_RECORD_FPS = env_float("CAMERA_RECORD_FPS", 2.0, minimum=0.0)  # 0 = the camera is not recorded
+CAMERA_RECORD_WIDTH = env_int("CAMERA_RECORD_WIDTH", 320, minimum=16)
+CAMERA_RECORD_HEIGHT = env_int("CAMERA_RECORD_HEIGHT", 240, minimum=16)
+CAMERA_RECORD_QUALITY = env_int("CAMERA_RECORD_QUALITY", 60, minimum=1)
+CAMERA_RETENTION_S = env_float("CAMERA_RETENTION_S", 2 * 86400.0, minimum=60)
+# An incident keeps every message of the black box's topics and every camera frame in [t - BEFORE, t + AFTER].
+INCIDENT_BEFORE_S = env_float("INCIDENT_BEFORE_S", 60.0, minimum=1)
+INCIDENT_AFTER_S = env_float("INCIDENT_AFTER_S", 30.0, minimum=1)
 CELERY_BEAT_SCHEDULE = {
     "history-sample": {
         "task": "history.sample",

@@ -11,7 +11,6 @@ from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 
 from cyborg_site.roles import is_operator, roles_cached
-from cyborg_site.server_patches.direct_frames import EXTENSION as FRAMES_EXTENSION
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.services_watch import ensure_watching
 from history.access import refusal, refused_topics
@@ -22,6 +21,7 @@ from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
 from robot.live.feed import alocal_hub, keeps_every_message
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
+from robot.live.hub import FRAMES_EXTENSION
 from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
 from robot.live.state import get_store
 from robot.live.topicwatch import TopicRefused, local_watches
@@ -60,7 +60,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         except Exception:  # Redis is away: the page still opens, and its status says so
             status = None
         await self.send(text_data=self.hub.status_frame(status_text(status)))
-        # Under Daphne: frames written straight to the connection (cyborg_site.server_patches.direct_frames).
+        # Under Daphne: frames written straight to the connection (server.patches.direct_frames).
         writer = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.socket = self.hub.attach(self._send_text, writer)
 

@@ -59,7 +59,7 @@ def ws_communicator(user, path: str = "/ws/live/"):
     """A communicator against the full ASGI application with ``user`` already authenticated."""
     from channels.testing import WebsocketCommunicator
 
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     communicator = WebsocketCommunicator(
         application, path, headers=[(b"origin", b"http://127.0.0.1"), (b"host", b"127.0.0.1")]

@@ -161,7 +161,7 @@ class Stack:
 
     def start_web(self) -> subprocess.Popen:
         self.webs = [
-            self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port), "cyborg_site.asgi:application"],
+            self._spawn([PYTHON, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port), "server.asgi:application"],
                         "web" if i == 0 else f"web{i}")
             for i, port in enumerate(self.web_ports)
         ]

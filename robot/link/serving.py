@@ -7,7 +7,7 @@ import asyncio
 import logging
 import time
 from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any, cast
 
 import roslibpy
 
@@ -18,16 +18,14 @@ from robot.link.rosclient import call_service
 from robot.link.subscriptions import Subscriptions
 from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, LinkReply, LinkRequest
 
-if TYPE_CHECKING:
-    from robot.link.connection import RobotLink
-
 log = logging.getLogger(__name__)
 
 REPLY_MARGIN_S = 0.3
 _NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "estop_release"})  # answered at once
 
-# Extra link operations other modules add (e.g. robot/link/audio.py): (link, request) -> reply.
-Operation = Callable[["RobotLink", LinkRequest], Awaitable[LinkReply]]
+# Extra link operations other modules add (e.g. robot/link/audio.py): (link, request) -> reply,
+# the link being the whole RobotLink (robot.link.connection), which is built on this layer.
+Operation = Callable[[Any, LinkRequest], Awaitable[LinkReply]]
 _operations: dict[str, Operation] = {}
 
 
@@ -87,7 +85,7 @@ class Serving(Subscriptions):
         if op == "ping":
             return {"ok": True}
         if op in _operations:
-            return await _operations[op](cast("RobotLink", self), request)
+            return await _operations[op](self, request)
         if op == "estop_release":
             if self.guard is not None:
                 self.guard.release()

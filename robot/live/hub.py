@@ -12,7 +12,7 @@ work per message). Instead each web process keeps one hub on its event loop:
   socket whose previous write has not finished is skipped until a later flush, so a slow browser
   gets the newest value later and never stalls the others or the link.
 
-Under Daphne a socket comes with a ``FrameWriter`` (cyborg_site.server_patches.direct_frames): sockets with the
+Under Daphne a socket comes with a ``FrameWriter`` (server.patches.direct_frames): sockets with the
 same pending updates share one encoded websocket frame, written with one ``send`` each, in the
 flush itself; "still writing" means the kernel has not taken the previous frame yet. Elsewhere
 (the test communicator) frames go through the consumer's ASGI send.
@@ -42,8 +42,12 @@ log = logging.getLogger(__name__)
 Send = Callable[[str], Awaitable[None]]
 
 
+# The ASGI scope extension under which a websocket offers its FrameWriter (server.patches.direct_frames).
+FRAMES_EXTENSION = "cyborg.frames"
+
+
 class FrameWriter(Protocol):
-    """Writes pre-encoded websocket frames to one connection (cyborg_site.server_patches.direct_frames)."""
+    """Writes pre-encoded websocket frames to one connection (server.patches.direct_frames)."""
 
     def write(self, frame: bytes) -> bool: ...
     def backlog(self) -> int: ...

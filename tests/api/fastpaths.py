@@ -18,7 +18,7 @@ def empty_token_cache():
 
 def spy_on_passed_on(monkeypatch, app_class: type, attribute: str) -> list[str]:
     """The paths of the requests the site's ``app_class`` hands to its ``attribute`` (the app behind it)."""
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     app = application.application_mapping["http"]
     while not isinstance(app, app_class):  # under the request counter (cyborg_site.drain)

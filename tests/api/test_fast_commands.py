@@ -28,7 +28,7 @@ def django_calls(monkeypatch):
 
 
 async def post(key: str, path: str = SPEECH, body: bytes | dict = b"", **extra: str) -> dict:
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     raw = body if isinstance(body, bytes) else json.dumps(body).encode()
     headers = {"Host": "127.0.0.1", "Authorization": f"Token {key}", "Content-Type": "application/json",

@@ -23,7 +23,7 @@ def django_calls(monkeypatch):
 
 
 async def get(headers: dict[str, str], path: str = PATH) -> dict:
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     raw = [(k.lower().encode(), v.encode()) for k, v in {"Host": "127.0.0.1", **headers}.items()]
     return await HttpCommunicator(application, "GET", path, headers=raw).get_response(timeout=10)
@@ -108,7 +108,7 @@ async def test_a_host_no_longer_allowed_goes_to_django_again(viewer, django_call
 async def test_hsts_follows_the_proxys_scheme_header(viewer, settings):
     from asgiref.sync import sync_to_async
 
-    from cyborg_site.asgi import django_asgi_app
+    from server.asgi import django_asgi_app
 
     settings.SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
     settings.SECURE_HSTS_SECONDS = 3600

@@ -33,7 +33,7 @@ def hops(monkeypatch):
 async def test_a_speech_command_crosses_to_a_thread_once_for_its_view(robot, operator, hops):
     from asgiref.sync import sync_to_async
 
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     key = (await sync_to_async(Token.objects.create)(user=operator)).key
     hops["to_thread"].clear()
@@ -53,8 +53,8 @@ async def test_a_speech_command_crosses_to_a_thread_once_for_its_view(robot, ope
 async def test_a_trusted_callers_speech_command_crosses_only_for_its_audit_row(robot, operator, hops):
     from asgiref.sync import sync_to_async
 
-    from cyborg_site.asgi import application
     from robot.commands.audit_writer import writer
+    from server.asgi import application
 
     key = (await sync_to_async(Token.objects.create)(user=operator)).key
     body = json.dumps({"text": "hops"}).encode()

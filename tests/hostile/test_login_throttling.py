@@ -132,7 +132,7 @@ async def _asgi(method: str, path: str, *, peer: str, forwarded: str = "", form:
     its status and the cookies it set."""
     from asgiref.testing import ApplicationCommunicator
 
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     body = f"{form}&csrfmiddlewaretoken={CSRF}".encode() if form else b""
     jar = {"csrftoken": CSRF, **(cookies or {})}

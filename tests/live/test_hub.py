@@ -145,7 +145,7 @@ async def test_the_first_snapshot_never_replaces_a_newer_live_value(viewer, monk
 
 
 class FakeWriter:
-    """A connection taking pre-encoded frames (cyborg_site.server_patches.direct_frames.FrameWriter's face)."""
+    """A connection taking pre-encoded frames (server.patches.direct_frames.FrameWriter's face)."""
 
     def __init__(self) -> None:
         self.frames: list[bytes] = []

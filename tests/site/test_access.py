@@ -29,7 +29,7 @@ async def test_it_refuses_anonymous_websockets():
 async def test_it_refuses_websockets_from_foreign_origins(viewer):
     from channels.testing import WebsocketCommunicator
 
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     communicator = WebsocketCommunicator(application, "/ws/live/", headers=[(b"origin", b"http://evil.example")])
     communicator.scope["user"] = viewer

@@ -7,7 +7,7 @@ from twisted.web.test.requesthelper import DummyRequest
 
 
 def test_twisted_writes_no_access_line_of_its_own():
-    import cyborg_site.asgi  # noqa: F401  (the web server's set-up)
+    import server.asgi  # noqa: F401  (the web server's set-up)
 
     events: list[dict] = []
     globalLogPublisher.addObserver(events.append)

@@ -3,7 +3,7 @@
 import gc
 import weakref
 
-from cyborg_site.gc_policy import freeze_startup_heap
+from server.gc_policy import freeze_startup_heap
 
 
 class Node:

@@ -4,7 +4,7 @@ site, or an entry of CSRF_TRUSTED_ORIGINS; anything else is refused before any c
 import pytest
 from channels.testing import WebsocketCommunicator
 
-from cyborg_site.ws_origin import origin_allowed
+from server.ws_origin import origin_allowed
 
 
 def scope(host: str, *, scheme: str = "ws", extra: tuple = ()) -> dict:
@@ -12,7 +12,7 @@ def scope(host: str, *, scheme: str = "ws", extra: tuple = ()) -> dict:
 
 
 async def connects(user, origin: str, host: str, path: str = "/ws/teleop/") -> bool:
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     communicator = WebsocketCommunicator(application, path, headers=[(b"origin", origin.encode()),
                                                                      (b"host", host.encode())])
@@ -40,7 +40,7 @@ async def test_it_accepts_the_sites_own_origin(operator):
 
 
 async def test_it_refuses_a_socket_without_origin_or_with_a_host_not_allowed(operator):
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     communicator = WebsocketCommunicator(application, "/ws/live/", headers=[(b"host", b"127.0.0.1:8200")])
     communicator.scope["user"] = operator

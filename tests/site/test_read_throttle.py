@@ -9,7 +9,7 @@ import asyncio
 from channels.testing import HttpCommunicator
 from django.test import override_settings
 
-from cyborg_site.read_throttle import Bucket, ReadThrottle, caller
+from server.read_throttle import Bucket, ReadThrottle, caller
 
 
 def test_a_bucket_gives_a_burst_then_paces_at_the_rate():

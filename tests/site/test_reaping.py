@@ -7,7 +7,7 @@ import logging
 import pytest
 from daphne.server import Server
 
-from cyborg_site.server_patches import reaping
+from server.patches import reaping
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ from channels.testing import WebsocketCommunicator
 from daphne.ws_protocol import WebSocketProtocol
 from django.conf import settings
 
-from cyborg_site.server_patches import refused_handshakes
+from server.patches import refused_handshakes
 from tests.helpers import wait_until
 from tests.stack import Stack
 
@@ -74,7 +74,7 @@ def test_a_real_daphne_refuses_malformed_hosts_and_origins_with_one_warning_line
 
 @pytest.mark.parametrize(("host", "origin"), MALFORMED)
 async def test_the_application_refuses_them_without_logging_an_error(operator, caplog, host, origin):
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     site = "127.0.0.1:8200"
     headers = [(b"host", host.format(site=site).encode())] if host is not None else []

@@ -1,6 +1,6 @@
 """The server patches are made for exact Daphne, Twisted and autobahn releases: the server refuses
 others, and each private part of theirs a patch uses has a canary here that fails when a release
-renames or drops it (then the patch is checked, and the pins in cyborg_site/server_patches/releases.py
+renames or drops it (then the patch is checked, and the pins in server/patches/releases.py
 move with the lock)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import inspect
 import pytest
 from django.core import checks
 
-from cyborg_site.server_patches import releases as server_versions
+from server.patches import releases as server_versions
 
 
 def test_the_installed_releases_are_the_patched_ones():
@@ -22,11 +22,11 @@ def test_another_release_is_refused_at_start_and_by_the_checks(monkeypatch):
     monkeypatch.setitem(server_versions.PATCHED_RELEASES, "twisted", "1.0")
     with pytest.raises(RuntimeError, match=r"twisted 26\.10\.0 \(the patches are for 1\.0\)"):
         server_versions.refuse_other_releases()
-    assert [e.id for e in checks.run_checks() if e.id == "cyborg_site.E002"] == ["cyborg_site.E002"]
+    assert [e.id for e in checks.run_checks() if e.id == "server.E001"] == ["server.E001"]
 
 
 def test_direct_frames_canaries():
-    """cyborg_site.server_patches.direct_frames writes to Twisted's transport and reads autobahn's state."""
+    """server.patches.direct_frames writes to Twisted's transport and reads autobahn's state."""
     from autobahn.websocket.protocol import WebSocketProtocol
     from twisted.internet import abstract, reactor
 
@@ -49,7 +49,7 @@ def test_reaping_and_frame_writer_canaries():
 
 
 def test_asgi_line_canaries():
-    """cyborg_site.asgi: WebRequest's form parsing switched off, HTTPFactory's own log line dropped,
+    """server.asgi: WebRequest's form parsing switched off, HTTPFactory's own log line dropped,
     Nagle off for Daphne's websockets; refused_handshakes wraps onClose."""
     from daphne.http_protocol import HTTPFactory, WebRequest
     from daphne.ws_protocol import WebSocketProtocol

@@ -33,7 +33,7 @@ def http_scope(path: str, cookie: bytes | None = None, query: bytes = b"") -> di
 
 
 async def open_stream(path: str, cookie: bytes | None = None) -> tuple[ApplicationCommunicator, dict]:
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     app = ApplicationCommunicator(application, http_scope(path, cookie))
     await app.send_input({"type": "http.request", "body": b"", "more_body": False})
@@ -197,7 +197,7 @@ async def test_a_persons_streams_end_within_a_second_of_their_access_ending(vide
 
 
 async def open_stream_with_query(path: str, cookie: bytes, query: bytes) -> tuple[ApplicationCommunicator, dict]:
-    from cyborg_site.asgi import application
+    from server.asgi import application
 
     app = ApplicationCommunicator(application, http_scope(path, cookie, query))
     await app.send_input({"type": "http.request", "body": b"", "more_body": False})

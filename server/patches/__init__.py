@@ -14,8 +14,8 @@ def install() -> None:
     from daphne.http_protocol import HTTPFactory, WebRequest
     from daphne.ws_protocol import WebSocketProtocol
 
-    from cyborg_site.server_patches import direct_frames, reaping, refused_handshakes
-    from cyborg_site.server_patches.releases import refuse_other_releases
+    from server.patches import direct_frames, reaping, refused_handshakes
+    from server.patches.releases import refuse_other_releases
 
     refuse_other_releases()
     # Same autobahn ordering issue as the robot link (robot/link/rosclient.py): without a class

@@ -16,9 +16,9 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-log = logging.getLogger(__name__)
+from robot.live.hub import FRAMES_EXTENSION as EXTENSION
 
-EXTENSION = "cyborg.frames"
+log = logging.getLogger(__name__)
 
 
 class FrameWriter:

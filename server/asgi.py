@@ -2,23 +2,23 @@ import os
 
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "cyborg_site.settings")
 
-from cyborg_site.handler import get_asgi_application
+from server.handler import get_asgi_application
 
 django_asgi_app = get_asgi_application()
 
 from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 
-from cyborg_site import server_patches  # noqa: E402
 from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
-from cyborg_site.gc_policy import freeze_when_running_in_daphne  # noqa: E402
-from cyborg_site.read_throttle import ReadThrottle  # noqa: E402
-from cyborg_site.ws_origin import OriginCheck  # noqa: E402
 from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
 from robot.api.fast_state import FastStateApp  # noqa: E402
 from robot.link.hosting import autostart_in_daphne  # noqa: E402
+from server import patches as server_patches  # noqa: E402
+from server.gc_policy import freeze_when_running_in_daphne  # noqa: E402
+from server.read_throttle import ReadThrottle  # noqa: E402
+from server.ws_origin import OriginCheck  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
