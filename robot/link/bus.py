@@ -45,6 +45,13 @@ class RobotOffline(RobotError):
     code = "offline"
 
 
+class RobotNotResponding(RobotError):
+    """Connected, but the robot has said nothing for a while (robot.link.liveness): it may be hung."""
+
+    status_code = 503
+    code = "not_responding"
+
+
 class RobotTimeout(RobotError):
     status_code = 504
     code = "timeout"
@@ -73,13 +80,18 @@ class Throttled(RobotError):
 
 _ERRORS: dict[str, type[RobotError]] = {
     "offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged, "not_found": RobotNotFound,
-    "throttled": Throttled,
+    "throttled": Throttled, "not_responding": RobotNotResponding,
 }
 
 
-async def _is_online() -> bool:
-    view = status_view((await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY))
-    return bool(view["robot_connected"] or view.get("connecting"))
+def _not_responding(request: LinkRequest, *, responding: bool) -> RobotNotResponding | None:
+    """A hung robot is sent no command but what stops it (the E-STOP's steps, zero velocity)."""
+    if responding or request.get("emergency") or request["op"] not in ("publish", "call_service"):
+        return None
+    if request.get("topic") == ri.topic("cmd_vel").name and ri.is_zero_twist(request.get("msg") or {}):
+        return None
+    return RobotNotResponding(f"Robot not responding: nothing heard from {settings.ROSBRIDGE_URL} "
+                              f"for {getattr(settings, 'ROBOT_HANG_S', 2.0):g} s; commands wait until it answers")
 
 
 _stopping: ContextVar[bool] = ContextVar("stopping", default=False)
@@ -145,6 +157,8 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
         # turn later (a command would wait for it before anything is sent).
         async with asyncio.timeout(timeout):
             if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
+                if refusal := _not_responding(request, responding=hosted.responding or not hosted.connected):
+                    raise refusal
                 reply = await _in_process(hosted, request)
             else:
                 reply = await _to_link_process(request, timeout)
@@ -162,8 +176,12 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
         except direct.Unreachable:
             pass  # no link listens there (an older one, or none yet): the usual way
     # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
-    if request["op"] not in ("reconnect", "topics_watch") and not await _is_online():
-        raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+    if request["op"] not in ("reconnect", "topics_watch"):
+        view = status_view((await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY))
+        if not (view["robot_connected"] or view.get("connecting")):
+            raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
+        if refusal := _not_responding(request, responding=view["responding"]):
+            raise refusal
     return await _via_layer(request)
 
 

@@ -17,6 +17,7 @@ from collections.abc import Callable
 
 from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
+from robot.link.liveness import watch_liveness
 from robot.link.rosclient import LinkRos, close_quietly
 from robot.link.serving import Serving
 from robot.link.subscriptions import REGISTRY_HOLDER, array_topics
@@ -72,6 +73,7 @@ class RobotLink(Serving):
             self.subscribe(t.name, t.type, holder=REGISTRY_HOLDER)
         self._tasks.append(supervise("link.heartbeat", self._heartbeat))
         self._tasks.append(supervise("link.port-watch", self._watch_port))
+        self._tasks.append(supervise("link.liveness", lambda: watch_liveness(self)))
         if serve_requests:
             self._serving = supervise("link.requests", self._serve)
             self._tasks.append(self._serving)

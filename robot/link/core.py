@@ -71,6 +71,10 @@ class LinkCore:
         self.guard: CmdVelGuard | None = None
         self.request_queue = request_queue  # scaled: requests arrive on this Redis list (robot.link.redisqueue)
         self.command_path = True  # until a ping over the request channel goes unanswered
+        # Liveness (robot.link.liveness): when the robot last said anything (a message, a rosapi answer),
+        # and whether that was recent enough to call it responding.
+        self.heard_at = time.time()
+        self.responding = True
         self.connecting_until = 0.0  # epoch time: until then, a link not yet connected is still connecting
         self._latch_msg: dict[str, Any] = {}
         # The last E-STOP this link took (epoch, who): written to the shared store if the store missed it.

@@ -44,6 +44,7 @@ class Upkeep(LinkCore):
             return
         self.failed_subscriptions.clear()  # roslibpy subscribes again now; refusals come back on /rosout
         self.connected, self.since, self.attempts = True, at, 0
+        self.heard_at, self.responding = at, True
         log.info("robot link connected to %s", self.url)
         self._spawn(self.publish_status())
 
@@ -65,6 +66,7 @@ class Upkeep(LinkCore):
             "holder": self.lease.holder if self.lease is not None else None,
             "failed_subscriptions": dict(self.failed_subscriptions),
             "connecting_until": self.connecting_until,
+            "responding": self.responding, "heard_at": self.heard_at,
         }
 
     async def set_command_path(self, ok: bool) -> None:

@@ -95,6 +95,7 @@ class Subscriptions(Upkeep):
     def _on_message(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if self._stopped:
             return
+        self.heard_at = t
         if name == ri.topic("rosout").name and msg.get("name") == ROSBRIDGE_NODE:
             self._note_refusal(str(msg.get("msg", "")))
         for listener in self.listeners:

@@ -77,6 +77,8 @@ class LinkStatus(TypedDict):
     holder: str | None  # scaled mode: the link process holding the lease
     failed_subscriptions: dict[str, str]  # topic -> why the robot refused it (since the last connect)
     connecting_until: float  # epoch seconds: a link just started, not yet connected, is connecting until then
+    responding: bool  # the robot said something (a message, a rosapi answer) within ROBOT_HANG_S
+    heard_at: float  # epoch seconds when it last did
 
 
 class LinkRequest(TypedDict, total=False):

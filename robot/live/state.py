@@ -141,13 +141,16 @@ def link_status(store: StateStore | None = None) -> dict[str, Any]:
 def status_view(status: dict[str, Any] | None, now: float | None = None) -> dict[str, Any]:
     now = now or time.time()
     if not status:
-        return {"connected": False, "robot_connected": False, "command_path": False, "url": settings.ROSBRIDGE_URL,
+        return {"connected": False, "robot_connected": False, "command_path": False, "responding": True,
+                "url": settings.ROSBRIDGE_URL,
                 "since": None, "attempts": 0, "link_alive": None}
     alive = now - float(status.get("link_alive") or 0) < LINK_HEARTBEAT_S * 3
     robot = bool(status.get("connected")) and alive
     path = alive and bool(status.get("command_path", True))
-    # "connected" only when a command can reach the robot: the robot is there and the link answers.
-    return {**status, "connected": robot and path, "robot_connected": robot, "command_path": path,
+    responding = not robot or bool(status.get("responding", True))
+    # "connected" only when a command can reach the robot: the robot is there, answers, and the link answers.
+    return {**status, "connected": robot and path and responding, "robot_connected": robot,
+            "command_path": path, "responding": responding,
             # A link just started (taking over) queues commands for its first connection.
             "connecting": alive and not robot and now < float(status.get("connecting_until") or 0),
             "link_running": alive}

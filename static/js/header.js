@@ -28,10 +28,13 @@ live.onStatus((status) => {
   if (!pill) return;
   pill.className = `pill ${status.connected ? "pill-ok" : "pill-bad"}`;
   // "Command path down": the link runs but does not answer requests; nothing would reach the robot.
+  // "Not responding": connected, but the robot has said nothing for a while (hung, frozen).
+  const hung = status.robot_connected && status.responding === false;
   pill.textContent = status.connected ? "robot online" : status.link_running === false ? "link down"
-    : status.command_path === false ? "command path down" : "robot offline";
+    : status.command_path === false ? "command path down" : hung ? "not responding" : "robot offline";
   pill.dataset.state = pill.textContent;
   pill.title = status.command_path === false
     ? "The robot link does not answer requests: commands, including E-STOP, cannot reach the robot"
+    : hung ? "Connected, but the robot has not answered for a while: commands are refused until it does"
     : status.url || "";
 });

@@ -1,0 +1,71 @@
+"""Liveness, not just connection: is the robot still talking?
+
+A frozen robot (its process stopped, its machine hung) keeps the TCP connection open, so the link
+stays "connected". The link therefore also watches what it hears: every topic message counts, and a
+cheap rosapi call (``/rosapi/get_time``) every ``PROBE_EVERY_S`` answers for a robot whose topics are
+quiet. Heard of nothing for ``settings.ROBOT_HANG_S`` (default 2 s), the robot is "not responding":
+the link's status says so at once (every page's pill), and commands that move or change the robot
+are refused with that reason (``robot.link.bus``) until it answers again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from typing import TYPE_CHECKING
+
+from django.conf import settings
+
+from robot import interface as ri
+from robot.link.rosclient import call_service
+
+if TYPE_CHECKING:
+    from robot.link.status import Upkeep
+
+log = logging.getLogger(__name__)
+
+CHECK_EVERY_S = 0.2
+PROBE_EVERY_S = 0.5
+
+
+def hang_s() -> float:
+    return float(getattr(settings, "ROBOT_HANG_S", 2.0))
+
+
+def judge(*, connected: bool, heard_at: float, now: float, hang: float) -> bool:
+    """Whether a robot heard of last at ``heard_at`` is responding (an unconnected one is simply offline)."""
+    return not connected or now - heard_at < hang
+
+
+async def _probe(link: Upkeep) -> None:
+    if link.ros is None:
+        return
+    service = ri.service("rosapi_get_time")
+    reply = await call_service(link.ros, service.name, service.type, {}, hang_s())
+    if reply.get("ok"):
+        link.heard_at = max(link.heard_at, time.time())
+
+
+async def watch_liveness(link: Upkeep) -> None:
+    probe: asyncio.Task | None = None
+    probed_at = 0.0
+    try:
+        while not link._stopped:
+            await asyncio.sleep(CHECK_EVERY_S)
+            now = time.time()
+            if link.connected and (probe is None or probe.done()) and now - probed_at >= PROBE_EVERY_S:
+                probed_at = now
+                probe = asyncio.ensure_future(_probe(link))
+            responding = judge(connected=link.connected, heard_at=link.heard_at, now=now, hang=hang_s())
+            if responding != link.responding:
+                link.responding = responding
+                if responding:
+                    log.warning("the robot answers again at %s", link.url)
+                else:
+                    log.error("the robot at %s is not responding: nothing heard for %.1f s", link.url,
+                              now - link.heard_at)
+                await link.publish_status()
+    finally:
+        if probe is not None:
+            probe.cancel()
