@@ -39,8 +39,8 @@ from robot.commands.audit import audit_record
 from robot.commands.pipeline import Busy, InvalidCommand, arun_command
 from robot.link.audio import LISTEN_RENEW_S
 from robot.link.bus import RobotError, apublish, arequest
+from robot.live.locks import HeldLock, Holder
 from robot.live.state import get_store
-from robot.teleop.lock import DriveLock, Holder
 
 log = logging.getLogger(__name__)
 
@@ -58,7 +58,7 @@ def _iso(t: float) -> str:
 
 class AudioSession:
     def __init__(self, *, user: Any, owner: str, address: str, allowed: bool, send_json: SendJSON,
-                 send_bytes: SendBytes, mic_group: Membership, lock: DriveLock | None = None) -> None:
+                 send_bytes: SendBytes, mic_group: Membership, lock: HeldLock | None = None) -> None:
         self.user = user
         self.me = Holder(owner=owner, username=user.get_username())
         self.address = address

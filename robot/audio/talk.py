@@ -1,6 +1,6 @@
 """The talk lock: one voice on the robot's speakers at a time, across every web process.
 
-It is the drive lock's mechanism (``robot.teleop.lock``) under a key of its own, with a
+A held lock (``robot.live.locks``) like the drive lock, under a name of its own, with a
 short time-to-live refreshed while audio flows, so a web process that dies mid-talk frees
 it within seconds. Every change is announced to every audio socket through one group.
 """
@@ -13,8 +13,7 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot.live.groups import TALK_GROUP
-from robot.live.state import redis_key
-from robot.teleop.lock import DriveLock, Holder, MemoryLock, RedisLock
+from robot.live.locks import HeldLock, Holder, held_lock
 
 
 class TalkEvent(TypedDict):
@@ -24,14 +23,13 @@ class TalkEvent(TypedDict):
     reason: str  # start | stop | quiet | disconnect | estop | offline | refused
 
 
-_lock: DriveLock | None = None
+_lock: HeldLock | None = None
 
 
-def get_talk_lock() -> DriveLock:
+def get_talk_lock() -> HeldLock:
     global _lock
     if _lock is None:
-        ttl = settings.AUDIO_TALK_LOCK_TTL_S
-        _lock = RedisLock(settings.REDIS_URL, redis_key("talk-lock"), ttl) if settings.REDIS_URL else MemoryLock(ttl)
+        _lock = held_lock("talk-lock", settings.AUDIO_TALK_LOCK_TTL_S)
     return _lock
 
 

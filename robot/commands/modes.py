@@ -22,15 +22,11 @@ be refused because a mode change is running.
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import threading
-import uuid
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
 from django.conf import settings
-from redis.exceptions import LockError
 
 from robot import interface as ri
 from robot.commands import moderoute
@@ -39,10 +35,9 @@ from robot.commands.pipeline import Busy, Command, arun
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
 from robot.link import bus
-from robot.live import redis_clients
+from robot.live import locks
 from robot.live.announce import apublish_state
 from robot.live.groups import MODE_REQUEST_KEY
-from robot.live.state import redis_key
 
 # How long one step may take to show up on state_change, and how many steps a change may take
 # (the longest way out is sleeping → idle → suspension; the rest is room for states that move
@@ -227,51 +222,20 @@ async def announce_request(mode: ri.Mode, *, by: str, status: str, error: str = 
 
 # --- serialisation -----------------------------------------------------------------------
 
-_local_lock = threading.Lock()  # views run on several loops/threads: not an asyncio.Lock
-_local_holder = ""
-
-
-def _busy(holder: str) -> Busy:
-    return Busy(f"A mode change to {holder or 'another mode'} is already in progress; try again in a moment.")
-
-
-def _lock_key() -> str:
-    return redis_key("mode-change-lock")
+LOCK = "mode-change-lock"
 
 
 async def change_under_way() -> bool:
-    if not settings.REDIS_URL:
-        return _local_lock.locked()
-    return bool(await redis_clients.aclient().exists(_lock_key()))
+    return await locks.is_taken(LOCK)
 
 
 @asynccontextmanager
 async def serialised(mode: ri.Mode) -> AsyncIterator[None]:
-    """Hold the mode-change lock for the duration, or raise ``Busy``."""
-    if settings.REDIS_URL:
-        async with _redis_lock(mode):
+    """Hold the mode-change lock for the duration, or raise ``Busy``; it expires just after the
+    longest a sequence can take, should this process die holding it."""
+    try:
+        async with locks.exclusive(LOCK, mode.short, ttl_s=longest_change_s(mode) + 1.0):
             yield
-        return
-    global _local_holder
-    if not _local_lock.acquire(blocking=False):
-        raise _busy(_local_holder)
-    _local_holder = mode.short
-    try:
-        yield
-    finally:
-        _local_holder = ""
-        _local_lock.release()
-
-
-@asynccontextmanager
-async def _redis_lock(mode: ri.Mode) -> AsyncIterator[None]:
-    # Expires just after the longest a sequence can take, should this process die holding it.
-    lock = redis_clients.aclient().lock(_lock_key(), timeout=longest_change_s(mode) + 1.0, blocking=False)
-    if not await lock.acquire(token=f"{uuid.uuid4().hex}:{mode.short}"):
-        held = await lock.redis.get(_lock_key())
-        raise _busy((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
-    try:
-        yield
-    finally:
-        with contextlib.suppress(LockError):  # expired meanwhile: nothing of ours to release
-            await lock.release()
+    except locks.Taken as taken:
+        raise Busy(f"A mode change to {taken.label or 'another mode'} is already in progress; "
+                   "try again in a moment.") from None

@@ -21,8 +21,9 @@ from django.conf import settings
 from robot.commands.latch import alatch
 from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
 from robot.link.bus import EstopEngaged, RobotError
+from robot.live.locks import HeldLock, Holder
 from robot.teleop.driving import LockEvent, announce, lock_acquire, lock_release, lock_takeover, teleop_record
-from robot.teleop.lock import DriveLock, Holder, get_lock
+from robot.teleop.lock import get_lock
 from robot.teleop.session import NotHolding, TeleopSession
 from robot.teleop.twist import Command, InvalidInput, command_from_input
 
@@ -30,7 +31,7 @@ Send = Callable[[dict[str, Any]], Awaitable[None]]
 
 
 class Driver:
-    def __init__(self, *, user: Any, owner: str, can_drive: bool, send: Send, lock: DriveLock | None = None) -> None:
+    def __init__(self, *, user: Any, owner: str, can_drive: bool, send: Send, lock: HeldLock | None = None) -> None:
         self.user = user
         self.me = Holder(owner=owner, username=user.get_username())
         self.can_drive = can_drive

@@ -14,7 +14,8 @@ from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, arun_command
 from robot.link.bus import EstopEngaged, RobotError
 from robot.live.groups import LOCK_GROUP
-from robot.teleop.lock import DriveLock, Holder, get_lock
+from robot.live.locks import HeldLock, Holder
+from robot.teleop.lock import get_lock
 from robot.teleop.session import publish_cmd_vel
 from robot.teleop.twist import STOP
 
@@ -34,7 +35,7 @@ async def announce(holder: Holder | None, reason: str) -> None:
     await get_channel_layer().group_send(LOCK_GROUP, event)
 
 
-async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock: DriveLock | None = None) -> Holder:
+async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock: HeldLock | None = None) -> Holder:
     """Take the free lock for ``me``; Busy if another connection drives."""
     lock = lock or get_lock()
 
@@ -50,7 +51,7 @@ async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock
     return me
 
 
-async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", lock: DriveLock | None = None) -> Holder:
+async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", lock: HeldLock | None = None) -> Holder:
     """An admin takes the lock from whoever holds it; the robot is stopped first."""
     lock = lock or get_lock()
     previous: Holder | None = None
@@ -73,7 +74,7 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
     return me
 
 
-async def _give_back_if_latched(lock: DriveLock, me: Holder) -> None:
+async def _give_back_if_latched(lock: HeldLock, me: Holder) -> None:
     """An E-STOP pressed while we took the lock: its own clear may have run before our take."""
     try:
         await ensure_released()
@@ -83,7 +84,7 @@ async def _give_back_if_latched(lock: DriveLock, me: Holder) -> None:
 
 
 async def lock_release(*, user: Any, me: Holder, reason: str, source: str = "websocket",
-                       lock: DriveLock | None = None) -> bool:
+                       lock: HeldLock | None = None) -> bool:
     """Give up the lock if ``me`` holds it (unlock, disconnect); True if it was held."""
     lock = lock or get_lock()
     if not await lock.release(me):

@@ -16,8 +16,8 @@ from collections.abc import Awaitable, Callable
 from django.conf import settings
 
 from robot.link.bus import RobotError, apublish
+from robot.live.locks import HeldLock, Holder
 from robot.supervisor import supervise
-from robot.teleop.lock import DriveLock, Holder
 from robot.teleop.twist import STOP, Command, twist
 
 log = logging.getLogger(__name__)
@@ -55,7 +55,7 @@ class TeleopSession:
         self,
         me: Holder,
         *,
-        lock: DriveLock,
+        lock: HeldLock,
         publish: Publisher = publish_cmd_vel,
         listener: Listener = _ignore,
         rate_hz: float | None = None,

@@ -7,6 +7,7 @@ import pytest
 from robot import interface as ri
 from robot.commands import modes
 from robot.commands.pipeline import Busy
+from robot.live.state import redis_key
 from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
@@ -46,9 +47,9 @@ async def test_it_lets_the_redis_lock_expire_if_its_holder_dies(settings):
     client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
     try:
         async with modes.serialised(ri.Mode.DEMO):
-            ttl_ms = await client.pttl(modes._lock_key())
+            ttl_ms = await client.pttl(redis_key(modes.LOCK))
         assert 0 < ttl_ms <= (modes.longest_change_s(ri.Mode.DEMO) + 1) * 1000
-        assert await client.exists(modes._lock_key()) == 0
+        assert await client.exists(redis_key(modes.LOCK)) == 0
     finally:
         await client.aclose()
 

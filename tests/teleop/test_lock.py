@@ -6,7 +6,7 @@ import uuid
 
 import pytest
 
-from robot.teleop.lock import Holder, MemoryLock, RedisLock
+from robot.live.locks import Holder, MemoryLock, RedisLock
 
 OTTO = Holder(owner="chan.otto", username="otto")
 OLGA = Holder(owner="chan.olga", username="olga")

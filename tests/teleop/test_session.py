@@ -9,7 +9,7 @@ import asyncio
 import pytest
 
 from robot.link.bus import RobotOffline
-from robot.teleop.lock import Holder, MemoryLock
+from robot.live.locks import Holder, MemoryLock
 from robot.teleop.session import NotHolding, TeleopSession, halt_all
 from robot.teleop.twist import Command
 from tests.helpers import async_wait_until
