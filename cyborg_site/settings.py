@@ -249,8 +249,20 @@ CELERY_TIMEZONE = "UTC"
 CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
 
 # --- The robot -------------------------------------------------------------------------
-ROSBRIDGE_URL = env_str("ROSBRIDGE_URL", "ws://127.0.0.1:9090")
-VIDEO_URL = env_str("VIDEO_URL", "http://127.0.0.1:8080")
+# UPLINK=true: the robot dials in (its uplink agent, through nginx at /uplink/) instead of being dialled.
+# The process that hosts the link then listens for the agent on UPLINK_LISTEN, and the link and the video
+# relay reach the robot through loopback relays on UPLINK_ROSBRIDGE_PORT and UPLINK_VIDEO_PORT (robot.uplink).
+UPLINK = env_bool("UPLINK", False)
+UPLINK_LISTEN = env_str("UPLINK_LISTEN", "127.0.0.1:8770")
+UPLINK_ROSBRIDGE_PORT = env_int("UPLINK_ROSBRIDGE_PORT", 8771, minimum=1)
+UPLINK_VIDEO_PORT = env_int("UPLINK_VIDEO_PORT", 8772, minimum=1)
+UPLINK_ROBOT = env_str("UPLINK_ROBOT", "cyborg")  # the robot whose credentials this server takes
+UPLINK_MAX_FRAME_BYTES = env_int("UPLINK_MAX_FRAME_BYTES", 64 * 1024 * 1024, minimum=1024)
+UPLINK_MAX_MESSAGES_PER_S = env_int("UPLINK_MAX_MESSAGES_PER_S", 5000, minimum=10)
+UPLINK_AUTH_TIMEOUT_S = env_float("UPLINK_AUTH_TIMEOUT_S", 5.0, minimum=0.1)
+UPLINK_FAILURE_LIMIT = env_int("UPLINK_FAILURE_LIMIT", 10, minimum=1)  # refused attempts per address and minute
+ROSBRIDGE_URL = env_str("ROSBRIDGE_URL", f"ws://127.0.0.1:{UPLINK_ROSBRIDGE_PORT}" if UPLINK else "ws://127.0.0.1:9090")
+VIDEO_URL = env_str("VIDEO_URL", f"http://127.0.0.1:{UPLINK_VIDEO_PORT}" if UPLINK else "http://127.0.0.1:8080")
 VIDEO_TOPIC = env_str("VIDEO_TOPIC", "/videostream")
 # Camera streams one web process serves at once: per person, and in all.
 CAMERA_STREAMS_PER_PERSON = env_int("CAMERA_STREAMS_PER_PERSON", 3, minimum=1)
