@@ -6,6 +6,8 @@ class HistoryConfig(AppConfig):
     default_auto_field = "django.db.models.BigAutoField"
 
     def ready(self) -> None:
+        from history.blackbox import run_blackbox
+        from history.camerarec import run_camera_recorder
         from history.recorder import run_recorder
         from history.sampling import run_schedule
         from robot.link.hosting import register_background
@@ -13,3 +15,5 @@ class HistoryConfig(AppConfig):
         # The recorder runs wherever the link runs; with REDIS_URL, Celery beat samples instead.
         register_background("history-recorder", run_recorder)
         register_background("history-schedule", run_schedule, embedded_only=True)
+        register_background("history-camera", run_camera_recorder)
+        register_background("history-blackbox", run_blackbox)

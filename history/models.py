@@ -116,3 +116,51 @@ class Rollup(Aggregate):
 
     def __str__(self) -> str:
         return f"{self.topic} {self.field} [{self.level_s} s #{self.slot}]"
+
+
+class Incident(models.Model):
+    """A black box: everything from ``start`` to ``end`` around a trigger, kept at full rate."""
+
+    class Kind(models.TextChoices):
+        ESTOP = "estop", "E-STOP"
+        BUMPER = "bumper", "bumper pressed"
+        LOG_ERROR = "log_error", "ERROR/FATAL log line"
+        DIAGNOSTICS = "diagnostics", "diagnostics ERROR"
+        MANUAL = "manual", "marked moment"
+
+    kind = models.CharField(max_length=16, choices=Kind.choices)
+    t = models.FloatField(help_text="When it happened (epoch seconds).")
+    start = models.FloatField()
+    end = models.FloatField()
+    summary = models.CharField(max_length=300, blank=True)
+    # Later triggers of the same kind inside the window: [{"t", "summary"}], at most a few dozen.
+    triggers = models.JSONField(default=list, blank=True)
+    by = models.CharField(max_length=150, blank=True, help_text="Who pressed or marked it.")
+    driver = models.CharField(max_length=150, blank=True, help_text="Who held the drive lock then.")
+    complete = models.BooleanField(default=False, help_text="The window has passed and was captured.")
+    held = models.BooleanField(default=True, help_text="Exempt from retention until an admin releases it.")
+    released_by = models.CharField(max_length=150, blank=True)
+    created = models.DateTimeField(auto_now_add=True)
+
+    class Meta:
+        ordering = ["-t"]
+        indexes = [models.Index(fields=["complete", "end"], name="history_incident_open")]
+
+    def __str__(self) -> str:
+        return f"{self.get_kind_display()} at {self.t:.0f}"
+
+
+class CameraFrame(models.Model):
+    """One recorded camera frame; the JPEG itself is a file under ``CAMERA_RECORD_DIR``."""
+
+    t = models.FloatField(db_index=True, help_text="Receive time (epoch seconds).")
+    path = models.CharField(max_length=100, help_text="Relative to CAMERA_RECORD_DIR.")
+    size = models.PositiveIntegerField()
+    # Set on the frames kept at full rate for an incident (beyond the low-rate recording).
+    incident = models.ForeignKey(Incident, null=True, blank=True, on_delete=models.SET_NULL)
+
+    class Meta:
+        ordering = ["t"]
+
+    def __str__(self) -> str:
+        return f"frame @ {self.t:.3f}"

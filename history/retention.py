@@ -1,4 +1,6 @@
-"""Retention: delete samples older than each topic's maximum age (and their rollups)."""
+"""Retention: delete samples older than each topic's maximum age (and their rollups), and old camera frames.
+
+What lies inside an incident's window is kept until an admin releases the incident."""
 
 from __future__ import annotations
 
@@ -7,6 +9,7 @@ import time
 
 from django.db import transaction
 
+from history.frames import held_windows, outside, prune_frames
 from history.models import Sample, TopicPolicy
 from history.storage import samples_deleted, utc
 
@@ -17,14 +20,16 @@ def prune_expired(*, now: float | None = None) -> int:
     """Delete every topic's samples older than its retention; returns rows deleted."""
     now = now or time.time()
     deleted = 0
+    held = [(utc(start), utc(end)) for start, end in held_windows()]
     for topic, retention_s in TopicPolicy.objects.filter(retention_s__isnull=False).values_list("topic", "retention_s"):
         if retention_s is None:  # excluded by the filter; the column is nullable
             continue
         cutoff = now - retention_s
         with transaction.atomic():
-            count, _ = Sample.objects.filter(topic=topic, received_at__lt=utc(cutoff)).delete()
+            count, _ = Sample.objects.filter(topic=topic, received_at__lt=utc(cutoff)).filter(
+                outside(held, "received_at")).delete()
             if count:
                 samples_deleted(topic=topic, start=None, end=cutoff)
                 log.info("history: pruned %d samples of %s older than %g s", count, topic, retention_s)
         deleted += count
-    return deleted
+    return deleted + prune_frames(now=now)

@@ -1,0 +1,177 @@
+"""The black box: the last minute of the chosen topics in memory, kept in full around incidents.
+
+``offer`` (a link listener, on the event-loop thread) appends every message of the black
+box's topics to a ring of the last ``INCIDENT_BEFORE_S`` seconds, checks it for a trigger,
+and queues it for storage when it falls in an open incident's window. The loop opens an
+incident for each trigger and for an E-STOP seen in the shared latch, adopts the incidents
+other processes opened (a marked moment), writes the ring's part of each new window and the
+messages since, and hands the camera recorder the same windows. Topics the recorder already
+stores every message of are not written twice.
+
+A restart loses the ring (the minute before an incident still open then), never what was
+queued: a clean stop writes it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from django.conf import settings
+
+from history import camerarec, recorder
+from history.incidents import Triggers, incident_open, incidents_to_capture
+from history.models import Incident
+from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
+from robot import interface as ri
+from robot.live.keys import LATCH_KEY
+
+log = logging.getLogger(__name__)
+
+TOPIC_KEYS = (
+    "robot_pose", "odom", "amcl_pose", "plan", "move_base_status", "state_change", "robot_mode",
+    "emotional_state", "battery_soc", "bumper_state", "motors_state", "diagnostics", "rosout",
+)
+TICK_S = 0.25
+ADOPT_EVERY_S = 1.0
+LINK_HOLDER = "blackbox"
+
+
+class BlackBox:
+    def __init__(self, *, writer: Callable[[Sequence[Row]], int] = write_rows) -> None:
+        self.writer = writer
+        self.topics = {ri.topic(key).name: ri.topic(key).type for key in TOPIC_KEYS}
+        self.keep_s = settings.INCIDENT_BEFORE_S + 5.0
+        self.ring: deque[list[Any]] = deque()  # [name, type, msg, t, kept]
+        self.windows: dict[int, tuple[float, float]] = {}
+        self.triggers = Triggers()
+        self.fired: list[tuple[str, float, str, str]] = []  # (kind, t, summary, by)
+        self._pending: list[Pending] = []
+        self._latch_at: float | None = None
+        self._write_log = FailureLog("writing incident messages")
+        self.received = self.stored = self.lost = 0
+
+    def _recorded_anyway(self) -> frozenset[str]:
+        return recorder.current.every if recorder.current is not None else frozenset()
+
+    # --- on the event-loop thread: never blocks --------------------------------------
+
+    def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        if name not in self.topics:
+            return
+        self.received += 1
+        entry = [name, msg_type, msg, t, False]
+        self.ring.append(entry)
+        while self.ring and self.ring[0][3] < t - self.keep_s:
+            self.ring.popleft()
+        if any(start <= t <= end for start, end in self.windows.values()):
+            self._keep(entry)
+        fired = self.triggers.check(name, msg)
+        if fired is not None:
+            self.fired.append((fired[0], t, fired[1], ""))
+
+    def _keep(self, entry: list[Any]) -> None:
+        entry[4] = True
+        if entry[0] not in self._recorded_anyway():
+            self._pending.append((entry[0], entry[1], entry[2], entry[3]))
+
+    def adopt(self, incident: Incident) -> None:
+        if incident.pk in self.windows:
+            return
+        self.windows[incident.pk] = (incident.start, incident.end)
+        for entry in self.ring:
+            if not entry[4] and incident.start <= entry[3] <= incident.end:
+                self._keep(entry)
+        if camerarec.current is not None:
+            camerarec.current.hold(incident.pk, incident.start, incident.end)
+
+    # --- the loop ---------------------------------------------------------------------
+
+    async def check_latch(self, store: Any) -> None:
+        entry = (await store.aget_many([LATCH_KEY])).get(LATCH_KEY) or {}
+        msg = entry.get("msg") or {}
+        at = float(msg.get("at") or 0.0)
+        if self._latch_at is not None and msg.get("latched") and at > self._latch_at:
+            self.fired.append((Incident.Kind.ESTOP, at, "E-STOP pressed", str(msg.get("by") or "")))
+        # The first reading is the latch as it was before this black box started: no incident.
+        self._latch_at = max(at, self._latch_at or 0.0)
+
+    async def open_fired(self) -> None:
+        while self.fired:
+            kind, t, summary, by = self.fired[0]
+            incident = await in_thread(incident_open, kind=kind, t=t, summary=summary, by=by)
+            self.fired.pop(0)  # only once stored: a database outage keeps it for the next tick
+            log.info("incident %s: %s at %.3f (%s)", incident.pk, kind, t, summary)
+            self.adopt(incident)
+
+    async def adopt_open(self) -> None:
+        for incident in await in_thread(incidents_to_capture):
+            self.adopt(incident)
+        now = time.time()
+        for pk, (_, end) in list(self.windows.items()):
+            if end < now - settings.HISTORY_FLUSH_S:
+                del self.windows[pk]
+        if camerarec.current is not None:
+            camerarec.current.release_past(now - settings.HISTORY_FLUSH_S)
+
+    async def flush(self) -> int:
+        pending, self._pending = self._pending, []
+        if not pending:
+            return 0
+        rows, _ = encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
+        try:
+            written = await in_thread(self.writer, rows)
+        except Exception:
+            self._write_log.failed()
+            self.lost += len(pending)
+            return 0
+        self._write_log.ok()
+        self.stored += written
+        return written
+
+    def subscribe(self, link: Any) -> None:
+        for name, msg_type in self.topics.items():
+            link.subscribe(name, msg_type, holder=LINK_HOLDER)  # again each second: a no-op once held
+
+    async def run(self, link: Any) -> None:
+        if self.offer not in link.listeners:
+            link.listeners.append(self.offer)
+        failures = FailureLog("the black box")
+        next_adopt = 0.0
+        try:
+            while True:
+                try:
+                    await self.check_latch(link.store)
+                    await self.open_fired()
+                    if time.monotonic() >= next_adopt:
+                        next_adopt = time.monotonic() + ADOPT_EVERY_S
+                        self.subscribe(link)
+                        await self.adopt_open()
+                    await self.flush()
+                    failures.ok()
+                except Exception:
+                    failures.failed()
+                await asyncio.sleep(TICK_S)
+        finally:
+            if self.offer in link.listeners:
+                link.listeners.remove(self.offer)
+            for name in self.topics:
+                link.unsubscribe(name, holder=LINK_HOLDER)
+            await self.flush()
+
+
+current: BlackBox | None = None
+
+
+async def run_blackbox(link: Any) -> None:
+    """The background service registered in ``HistoryConfig.ready``."""
+    global current
+    current = BlackBox()
+    try:
+        await current.run(link)
+    finally:
+        current = None

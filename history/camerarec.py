@@ -1,0 +1,153 @@
+"""The camera recorder: one MJPEG stream from the video server at the recording size.
+
+Every frame goes into a ring of the last ``INCIDENT_BEFORE_S`` seconds; one every
+1 / ``CAMERA_RECORD_FPS`` seconds is kept for replay, and every frame inside an incident's
+window (``hold``) is kept for the incident, including those already in the ring when the
+incident began. Frames are written from a worker thread every ``HISTORY_FLUSH_S``; a clean
+stop writes what it took. It runs wherever the link runs (a background service).
+
+It reads the video server itself, not through the dashboard's relay (history sits below the
+dashboard): the recording size is one more encoder on the robot's video server, however many
+people watch.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import aiohttp
+from django.conf import settings
+
+from history.frames import Frame, write_frames
+from history.storage import FailureLog, in_thread
+
+log = logging.getLogger(__name__)
+
+RECONNECT_S = 2.0
+MAX_FRAME_BYTES = 10 * 1024 * 1024
+CONNECT_TIMEOUT_S = 3.0
+READ_TIMEOUT_S = 10.0
+
+
+class CameraRecorder:
+    def __init__(self, *, writer: Callable[[Sequence[Frame]], int] = write_frames, fps: float | None = None) -> None:
+        self.writer = writer
+        self.fps = settings.CAMERA_RECORD_FPS if fps is None else fps
+        self.keep_s = settings.INCIDENT_BEFORE_S + 5.0
+        # [t, jpeg, kept]: kept once the frame is on its way to storage.
+        self.ring: deque[list[Any]] = deque()
+        self.windows: dict[int, tuple[float, float]] = {}  # incident id -> (start, end)
+        self._last_kept = 0.0
+        self._pending: list[Frame] = []
+        self._write_log = FailureLog("writing camera frames")
+        self.received = self.stored = self.lost = 0
+
+    def offer(self, t: float, jpeg: bytes) -> None:
+        self.received += 1
+        entry = [t, jpeg, False]
+        self.ring.append(entry)
+        while self.ring and self.ring[0][0] < t - self.keep_s:
+            self.ring.popleft()
+        incident = self._incident_at(t)
+        if incident is not None:
+            self._keep(entry, incident)
+        elif self.fps > 0 and t - self._last_kept >= 1.0 / self.fps * 0.95:
+            self._keep(entry, None)
+
+    def _incident_at(self, t: float) -> int | None:
+        return next((i for i, (start, end) in self.windows.items() if start <= t <= end), None)
+
+    def _keep(self, entry: list[Any], incident: int | None) -> None:
+        entry[2] = True
+        if incident is None:
+            self._last_kept = entry[0]
+        self._pending.append((entry[0], entry[1], incident))
+
+    def hold(self, incident: int, start: float, end: float) -> None:
+        """Keep every frame in [start, end] for ``incident``: those in the ring now and those to come."""
+        self.windows[incident] = (start, end)
+        for entry in self.ring:
+            if not entry[2] and start <= entry[0] <= end:
+                self._keep(entry, incident)
+
+    def release_past(self, now: float) -> None:
+        for incident, (_, end) in list(self.windows.items()):
+            if end < now:
+                del self.windows[incident]
+
+    async def flush(self) -> int:
+        pending, self._pending = self._pending, []
+        if not pending:
+            return 0
+        try:
+            written = await in_thread(self.writer, sorted(pending, key=lambda f: f[0]))
+        except Exception:
+            self._write_log.failed()
+            self.lost += len(pending)
+            return 0
+        self._write_log.ok()
+        self.stored += written
+        return written
+
+    async def run(self) -> None:
+        pump = asyncio.ensure_future(self._pump_forever())
+        try:
+            while True:
+                await asyncio.sleep(settings.HISTORY_FLUSH_S)
+                await self.flush()
+        finally:
+            pump.cancel()
+            await asyncio.gather(pump, return_exceptions=True)
+            await self.flush()  # a clean stop loses nothing it took
+
+    async def _pump_forever(self) -> None:
+        failures = FailureLog("reading the camera for recording")
+        while True:
+            try:
+                await self._pump()
+                failures.ok()
+            except asyncio.CancelledError:
+                raise
+            except (aiohttp.ClientError, TimeoutError, ValueError, OSError):
+                failures.failed()
+            await asyncio.sleep(RECONNECT_S)
+
+    async def _pump(self) -> None:
+        params = {"topic": settings.VIDEO_TOPIC, "type": "mjpeg", "width": settings.CAMERA_RECORD_WIDTH,
+                  "height": settings.CAMERA_RECORD_HEIGHT, "quality": settings.CAMERA_RECORD_QUALITY}
+        timeout = aiohttp.ClientTimeout(total=None, sock_connect=CONNECT_TIMEOUT_S, sock_read=READ_TIMEOUT_S)
+        url = f"{settings.VIDEO_URL.rstrip('/')}/stream"
+        async with aiohttp.ClientSession(timeout=timeout) as session:
+            async with session.get(url, params={k: str(v) for k, v in params.items()}) as response:
+                if response.status != 200 or not response.content_type.startswith("multipart/"):
+                    raise ValueError(f"video server answered {response.status} {response.content_type}")
+                reader = aiohttp.MultipartReader(response.headers, response.content)
+                while (part := await reader.next()) is not None:
+                    if not isinstance(part, aiohttp.BodyPartReader):
+                        raise ValueError("nested multipart in a camera stream")
+                    jpeg = await part.read()
+                    if len(jpeg) <= MAX_FRAME_BYTES:
+                        # Receive time on the server's clock, like every recorded message.
+                        self.offer(time.time(), bytes(jpeg))
+
+
+# The camera recorder running in this process, if any (the black box holds its frames).
+current: CameraRecorder | None = None
+
+
+async def run_camera_recorder(link: Any) -> None:
+    """The background service registered in ``HistoryConfig.ready``."""
+    global current
+    camera = CameraRecorder()
+    if camera.fps <= 0:
+        await asyncio.Event().wait()  # recording is off: idle until cancelled
+    current = camera
+    try:
+        await camera.run()
+    finally:
+        current = None
