@@ -1,0 +1,216 @@
+"""Replay: the robot as it was at a moment, read from the same history as the plots.
+
+``state_at`` is a seek: the latest recorded value of each replayed topic at or before ``t``
+(one indexed query per topic on ``(topic, received_at)``), the map of that time, the pose
+trail and goal, the log lines and commands (with who) before it, and its camera frame.
+``window`` is what a player needs to run on from there without asking again: every change in
+(start, end], in time order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from django.conf import settings
+from django.db.models import Max, Min
+
+from history.frames import frame_at
+from history.models import CameraFrame, Incident, Sample
+from history.storage import utc
+from robot import interface as ri
+from robot.models import AuditEntry
+from robot.navigation.mapimage import render_map
+from robot.navigation.transforms import quaternion_to_yaw
+
+# What the Dashboard and Map show, replayed.
+STATE_KEYS = (
+    "robot_pose", "state_change", "robot_mode", "emotional_state", "battery_soc", "battery_voltage",
+    "motors_state", "bumper_state", "move_base_status", "plan", "diagnostics", "current_location",
+)
+TRAIL_S = 60.0
+LOG_BEFORE_S = 300.0
+LOG_LINES = 30
+COMMANDS_BEFORE_S = 600.0
+COMMANDS = 20
+PLAN_FRESH_S = 30.0
+MAX_WINDOW_S = 300.0
+
+
+def topic_names(keys: Iterable[str]) -> dict[str, str]:
+    return {ri.topic(key).name: key for key in keys}
+
+
+def _latest(topic: str, t: float) -> dict[str, Any] | None:
+    row = (Sample.objects.filter(topic=topic, received_at__lte=utc(t)).order_by("-received_at")
+           .values_list("received_at", "data").first())
+    return {"t": row[0].timestamp(), "msg": row[1]} if row else None
+
+
+def pose_point(t: float, msg: dict[str, Any]) -> list[float] | None:
+    position, orientation = msg.get("position") or {}, msg.get("orientation") or {}
+    try:
+        return [round(t, 3), float(position["x"]), float(position["y"]), round(quaternion_to_yaw(orientation), 4)]
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def goal_of(plan: dict[str, Any] | None, status: dict[str, Any] | None, t: float) -> dict[str, float] | None:
+    """The goal being driven to: the end of a fresh plan while move_base has an active goal."""
+    if not plan or t - plan["t"] > PLAN_FRESH_S:
+        return None
+    active = any(s.get("status") == 1 for s in ((status or {}).get("msg") or {}).get("status_list") or ())
+    poses = (plan["msg"] or {}).get("poses") or []
+    if not active or not poses:
+        return None
+    end = (poses[-1].get("pose") or {}).get("position") or {}
+    return {"x": float(end.get("x", 0.0)), "y": float(end.get("y", 0.0))}
+
+
+def log_lines(start: float, end: float, limit: int | None = None) -> list[dict[str, Any]]:
+    rows = Sample.objects.filter(topic=ri.topic("rosout").name, received_at__gt=utc(start), received_at__lte=utc(end))
+    if limit is not None:
+        picked = list(rows.order_by("-received_at").values_list("received_at", "data")[:limit])[::-1]
+    else:
+        picked = list(rows.order_by("received_at").values_list("received_at", "data"))
+    return [{"t": at.timestamp(), "level": ri.LOG_LEVELS.get(d.get("level"), str(d.get("level"))),
+             "name": d.get("name", ""), "msg": d.get("msg", "")} for at, d in picked]
+
+
+def commands(start: float, end: float, limit: int | None = None) -> list[dict[str, Any]]:
+    rows = AuditEntry.objects.filter(created__gt=utc(start), created__lte=utc(end))
+    if limit is not None:
+        picked = list(rows.order_by("-created", "-id")[:limit])[::-1]
+    else:
+        picked = list(rows.order_by("created", "id"))
+    return [{"id": e.pk, "t": e.created.timestamp(), "who": e.username or "system", "action": e.action,
+             "params": e.params, "ok": e.ok, "outcome": e.outcome} for e in picked]
+
+
+def trail(start: float, end: float) -> list[list[float]]:
+    rows = Sample.objects.filter(topic=ri.topic("robot_pose").name, received_at__gt=utc(start),
+                                 received_at__lte=utc(end)).order_by("received_at").values_list("received_at", "data")
+    points = [pose_point(at.timestamp(), d) for at, d in rows]
+    return [p for p in points if p is not None]
+
+
+def frame_info(frame: CameraFrame | None) -> dict[str, Any] | None:
+    return None if frame is None else {"id": frame.pk, "t": frame.t, "url": f"/api/history/frames/{frame.pk}.jpg"}
+
+
+def map_at(t: float) -> dict[str, Any] | None:
+    sample_id = (Sample.objects.filter(topic=ri.topic("map").name, received_at__lte=utc(t))
+                 .order_by("-received_at").values_list("id", flat=True).first())
+    if sample_id is None:
+        return None
+    version, geometry = rendered_map(sample_id)
+    return {"id": sample_id, "version": version, "url": f"/api/history/replay/map/{sample_id}.png", **geometry}
+
+
+def replay_map_dir() -> Path:
+    return Path(settings.VAR_DIR) / "replay-maps"
+
+
+@lru_cache(maxsize=32)
+def rendered_map(sample_id: int) -> tuple[str, dict[str, Any]]:
+    """(version, geometry) of a recorded map, rendered once to ``replay_map_dir``."""
+    msg = Sample.objects.values_list("data", flat=True).get(pk=sample_id)
+    rendered = render_map(msg, replay_map_dir())
+    g = rendered.geometry
+    return rendered.version, {"width": g.width, "height": g.height, "resolution": g.resolution,
+                              "origin": {"x": g.origin_x, "y": g.origin_y, "yaw": g.origin_yaw}}
+
+
+def map_png(sample_id: int) -> Path:
+    version, _ = rendered_map(sample_id)
+    path = replay_map_dir() / f"{version}.png"
+    if not path.exists():  # pruned by a newer render: draw it again
+        rendered_map.cache_clear()
+        version, _ = rendered_map(sample_id)
+        path = replay_map_dir() / f"{version}.png"
+    return path
+
+
+def state_at(t: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any]:
+    """The robot as it was at ``t``; topics named in ``hidden`` (sensitive for this person) left out."""
+    topics = {key: _latest(name, t) for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    pose = topics.get("robot_pose")
+    return {
+        "t": t,
+        "topics": {key: value for key, value in topics.items() if value is not None},
+        "pose": pose_point(pose["t"], pose["msg"]) if pose else None,
+        "trail": trail(t - TRAIL_S, t) if "robot_pose" in topics else [],
+        "goal": goal_of(topics.get("plan"), topics.get("move_base_status"), t),
+        "map": map_at(t),
+        "log": log_lines(t - LOG_BEFORE_S, t, LOG_LINES) if ri.topic("rosout").name not in hidden else [],
+        "commands": commands(t - COMMANDS_BEFORE_S, t, COMMANDS),
+        "frame": frame_info(frame_at(t)),
+    }
+
+
+def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any]:
+    """Every change in (start, end] (at most ``MAX_WINDOW_S``), for a player to run through."""
+    end = min(end, start + MAX_WINDOW_S)
+    names = {name: key for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    rows = (Sample.objects.filter(topic__in=list(names), received_at__gt=utc(start), received_at__lte=utc(end))
+            .order_by("received_at").values_list("topic", "received_at", "data"))
+    changes: list[list[Any]] = []
+    poses: list[list[float]] = []
+    for topic, at, data in rows:
+        key = names[topic]
+        if key == "robot_pose":
+            if (point := pose_point(at.timestamp(), data)) is not None:
+                poses.append(point)
+        else:
+            changes.append([round(at.timestamp(), 3), key, data])
+    frames = CameraFrame.objects.filter(t__gt=start, t__lte=end).order_by("t").values_list("t", "id")
+    maps = Sample.objects.filter(topic=ri.topic("map").name, received_at__gt=utc(start), received_at__lte=utc(end))
+    return {
+        "start": start, "end": end, "poses": poses, "changes": changes,
+        "log": log_lines(start, end) if ri.topic("rosout").name not in hidden else [],
+        "commands": commands(start, end),
+        "frames": [[round(ft, 3), fid] for ft, fid in frames],
+        "maps": [map_at(at.timestamp()) for at in maps.values_list("received_at", flat=True)],
+    }
+
+
+def span() -> dict[str, float | None]:
+    """The first and last recorded moment (of the pose, the state and the camera)."""
+    names = list(topic_names(("robot_pose", "state_change", "robot_mode")))
+    samples = Sample.objects.filter(topic__in=names).aggregate(first=Min("received_at"), last=Max("received_at"))
+    frames = CameraFrame.objects.aggregate(first=Min("t"), last=Max("t"))
+    firsts = [v for v in (samples["first"] and samples["first"].timestamp(), frames["first"]) if v]
+    lasts = [v for v in (samples["last"] and samples["last"].timestamp(), frames["last"]) if v]
+    return {"first": min(firsts) if firsts else None, "last": max(lasts) if lasts else None}
+
+
+def parse_time(text: str | None) -> float | None:
+    try:
+        value = float(text or "")
+    except ValueError:
+        return None
+    return value if math.isfinite(value) and value > 0 else None
+
+
+DEFAULT_RANGE_S = 600.0
+
+
+def replay_start(incident: str | None, audit: str | None, t: str | None, start: str | None,
+                 end: str | None) -> dict[str, Any]:
+    """Where a replay page opens: an incident's window, the minutes around an audit row, a given
+    range or moment, else the last ten recorded minutes."""
+    if incident and incident.isdigit() and (found := Incident.objects.filter(pk=int(incident)).first()):
+        return {"start": found.start, "end": found.end, "t": found.t, "incident": found.pk}
+    if audit and audit.isdigit() and (entry := AuditEntry.objects.filter(pk=int(audit)).first()):
+        moment = entry.created.timestamp()
+        return {"start": moment - 120.0, "end": moment + 60.0, "t": moment, "audit": entry.pk}
+    lo, hi, at = parse_time(start), parse_time(end), parse_time(t)
+    if lo and hi and hi > lo:
+        return {"start": lo, "end": hi, "t": min(max(at or lo, lo), hi)}
+    if at:
+        return {"start": at - DEFAULT_RANGE_S / 2, "end": at + DEFAULT_RANGE_S / 2, "t": at}
+    last = float(span()["last"] or 0.0)
+    return {"start": last - DEFAULT_RANGE_S, "end": last, "t": last - DEFAULT_RANGE_S}

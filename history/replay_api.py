@@ -1,0 +1,138 @@
+"""Replay and incident API (under /api/history/): thin views over ``history.replay`` and ``history.incidents``."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from django.http import FileResponse, Http404, HttpResponse
+from drf_spectacular.utils import OpenApiParameter, extend_schema
+from rest_framework import exceptions, status
+from rest_framework.decorators import api_view
+from rest_framework.request import Request
+from rest_framework.response import Response
+
+from cyborg_site.roles import is_admin, is_operator
+from history import replay
+from history.access import refused_topics
+from history.frames import frame_file
+from history.incidents import incident_open, incident_release, incident_thumbnail
+from history.mcapexport import incident_mcap
+from history.models import CameraFrame, Incident
+from robot import interface as ri
+
+T_PARAM = OpenApiParameter("t", float, description="The moment, in epoch seconds.")
+
+
+def _hidden(request: Request) -> frozenset[str]:
+    names = [ri.topic(key).name for key in (*replay.STATE_KEYS, "rosout")]
+    return frozenset(refused_topics(request.user, names))
+
+
+def _time(request: Request, name: str) -> float:
+    value = replay.parse_time(request.query_params.get(name))
+    if value is None:
+        raise exceptions.ValidationError({name: "a moment in epoch seconds"})
+    return value
+
+
+@extend_schema(parameters=[T_PARAM], summary="The robot as it was at a moment: state, map, pose, log, commands, frame")
+@api_view(["GET"])
+def state_view(request: Request) -> Response:
+    return Response(replay.state_at(_time(request, "t"), hidden=_hidden(request)))
+
+
+@extend_schema(parameters=[OpenApiParameter("start", float), OpenApiParameter("end", float)],
+               summary="Every change in (start, end] (at most 5 minutes), for a replay to play through")
+@api_view(["GET"])
+def window_view(request: Request) -> Response:
+    start, end = _time(request, "start"), _time(request, "end")
+    if end <= start:
+        raise exceptions.ValidationError({"end": "after start"})
+    return Response(replay.window(start, end, hidden=_hidden(request)))
+
+
+@extend_schema(summary="The first and last recorded moment")
+@api_view(["GET"])
+def span_view(request: Request) -> Response:
+    return Response(replay.span())
+
+
+@extend_schema(summary="A recorded camera frame (JPEG)", responses={(200, "image/jpeg"): bytes})
+@api_view(["GET"])
+def frame_view(request: Request, frame_id: int) -> FileResponse:
+    frame = CameraFrame.objects.filter(pk=frame_id).first()
+    if frame is None or not frame_file(frame).is_file():
+        raise Http404("no such frame")
+    response = FileResponse(frame_file(frame).open("rb"), content_type="image/jpeg")
+    response["Cache-Control"] = "private, max-age=86400, immutable"
+    response["X-Frame-Time"] = f"{frame.t:.3f}"
+    return response
+
+
+@extend_schema(summary="A recorded map as an image", responses={(200, "image/png"): bytes})
+@api_view(["GET"])
+def map_view(request: Request, sample_id: int) -> FileResponse:
+    try:
+        path = replay.map_png(sample_id)
+    except Exception:
+        raise Http404("no such map") from None
+    response = FileResponse(path.open("rb"), content_type="image/png")
+    response["Cache-Control"] = "private, max-age=86400, immutable"
+    return response
+
+
+def incident_out(incident: Incident) -> dict[str, Any]:
+    thumb = incident_thumbnail(incident)
+    return {
+        "id": incident.pk, "kind": incident.kind, "kind_label": incident.get_kind_display(), "t": incident.t,
+        "start": incident.start, "end": incident.end, "summary": incident.summary, "by": incident.by,
+        "driver": incident.driver, "triggers": incident.triggers, "complete": incident.complete,
+        "held": incident.held, "released_by": incident.released_by,
+        "thumbnail": replay.frame_info(thumb)["url"] if thumb else None,  # type: ignore[index]
+        "replay": f"/history/replay/?incident={incident.pk}",
+        "mcap": f"/api/history/incidents/{incident.pk}/mcap/",
+    }
+
+
+@extend_schema(summary="Incidents, newest first (GET); mark this moment (POST, operators)")
+@api_view(["GET", "POST"])
+def incidents_view(request: Request) -> Response:
+    if request.method == "POST":
+        if not is_operator(request.user):
+            raise exceptions.PermissionDenied("Only operators may mark a moment.")
+        note = str(request.data.get("note") or "marked moment")[:300]
+        incident = incident_open(kind=Incident.Kind.MANUAL, t=time.time(), summary=note,
+                                 by=request.user.get_username())
+        return Response(incident_out(incident), status=status.HTTP_201_CREATED)
+    return Response({"incidents": [incident_out(i) for i in Incident.objects.all()[:200]]})
+
+
+@extend_schema(summary="Let retention have an incident (admins)")
+@api_view(["POST"])
+def release_view(request: Request, incident_id: int) -> Response:
+    if not is_admin(request.user):
+        raise exceptions.PermissionDenied("Only admins may release an incident.")
+    incident = Incident.objects.filter(pk=incident_id).first()
+    if incident is None:
+        raise Http404("no such incident")
+    return Response(incident_out(incident_release(incident=incident, by=request.user.get_username())))
+
+
+@extend_schema(summary="An incident as one MCAP file (camera as foxglove.CompressedImage, pose, every topic)",
+               responses={(200, "application/octet-stream"): bytes})
+@api_view(["GET"])
+def mcap_view(request: Request, incident_id: int) -> HttpResponse:
+    incident = Incident.objects.filter(pk=incident_id).first()
+    if incident is None:
+        raise Http404("no such incident")
+    data = incident_mcap(incident, hidden=frozenset(refused_topics(request.user, _recorded_topics(incident))))
+    response = HttpResponse(data, content_type="application/octet-stream")
+    response["Content-Disposition"] = f'attachment; filename="incident-{incident.pk}-{incident.kind}.mcap"'
+    return response
+
+
+def _recorded_topics(incident: Incident) -> list[str]:
+    from history.mcapexport import topics_in
+
+    return topics_in(incident.start, incident.end)
