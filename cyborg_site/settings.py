@@ -69,6 +69,7 @@ INSTALLED_APPS = [
     "drf_spectacular_sidecar",
     "axes",
     "robot",
+    "robot.alerts",
     "dashboard",
     "history",
     "server",

@@ -4,7 +4,7 @@ from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerSplitVie
 from rest_framework.permissions import IsAuthenticated
 from rest_framework.routers import SimpleRouter
 
-from robot.api import commands, navigation, topics
+from robot.api import alerts, commands, navigation, topics
 from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
 from robot.api.base import API_AUTHENTICATION
@@ -28,6 +28,8 @@ urlpatterns = [
     path("robot/estop/", EstopView.as_view(), name="robot-estop"),
     path("robot/estop/release/", EstopReleaseView.as_view(), name="robot-estop-release"),
     path("audit/", AuditListView.as_view(), name="api-audit"),
+    path("alerts/", alerts.alerts_view, name="api-alerts"),
+    path("alerts/<str:alert_id>/ack/", alerts.acknowledge_view, name="api-alert-ack"),
     path("map/", navigation.map_view, name="api-map"),
     path("navigation/goal/", navigation.goal_view, name="api-navigation-goal"),
     path("navigation/cancel/", navigation.cancel_view, name="api-navigation-cancel"),

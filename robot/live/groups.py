@@ -7,10 +7,6 @@ from __future__ import annotations
 
 from typing import Any, Literal, TypedDict
 
-# The robot link listens on this channel for requests from web processes and tasks.
-LINK_CHANNEL = "robot-link"
-# A request's reply_to with this prefix names a Redis list the link pushes its reply onto.
-REPLY_LIST_PREFIX = "redis-list:"
 # Every drive page hears who holds the driving lock.
 LOCK_GROUP = "teleop.lock"
 # Listening pages hear the robot's microphone; audio pages hear who holds the talk lock.
@@ -33,6 +29,7 @@ AT_LOCATION_KEY = "at_location"  # the named location the robot is at, by its wo
 SMACH_GRAPH_KEY = "smach_graph"  # the state machine's containers as a graph (robot.introspection)
 SMACH_ACTIVE_KEY = "smach_active"  # its active states, and the events that leave them
 DIAGNOSTICS_KEY = "diagnostics_summary"  # the latest diagnostics of every component
+ALERTS_KEY = "alerts"  # the alerts on now (written by robot.alerts.engine where the link runs)
 LATCH_KEY = "estop"  # the E-STOP latch (written by robot.commands.latch, read by the link)
 # Map overlays, made by the link from the robot's topics (robot.overlays): map-frame shapes, costmap tiles.
 OVERLAY_SCAN_KEY = "overlay_scan"

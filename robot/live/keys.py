@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from robot import interface as ri
 from robot.live.groups import (
+    ALERTS_KEY,
     AT_LOCATION_KEY,
     DIAGNOSTICS_KEY,
     GOAL_KEY,
@@ -37,7 +38,8 @@ OVERLAY_SOURCES: dict[str, tuple[str, ...]] = {
     OVERLAY_GLOBAL_COSTMAP_KEY: ("global_costmap", "global_costmap_updates", "tf", "tf_static"),
     OVERLAY_LOCAL_COSTMAP_KEY: ("local_costmap", "local_costmap_updates", "tf", "tf_static"),
 }
-SERVER_KEYS = frozenset({MODE_REQUEST_KEY, LATCH_KEY, *NAVIGATION_KEYS, *INTROSPECTION_KEYS, *OVERLAY_SOURCES})
+SERVER_KEYS = frozenset({
+    MODE_REQUEST_KEY, LATCH_KEY, ALERTS_KEY, *NAVIGATION_KEYS, *INTROSPECTION_KEYS, *OVERLAY_SOURCES})
 
 # The dashboard home.
 HOME_KEYS = (
@@ -56,6 +58,8 @@ MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location", "bumper_state", *NAVI
 DRIVE_KEYS = ("odom", "robot_pose", "motors_state")
 # The map page's overlays, each switched on and off by the operator (dashboard.preferences).
 MAP_OVERLAY_KEYS = tuple(OVERLAY_SOURCES)
+# Every page's header: the alert strip and the battery.
+HEADER_KEYS = (ALERTS_KEY, "battery_soc")
 # What the state API reports.
 STATE_KEYS = HOME_KEYS
 

@@ -1,0 +1,5 @@
+"""Alerts beyond the tab (filled in by the delivery slice)."""
+
+
+def install() -> None:
+    return None

@@ -1,0 +1,98 @@
+"""Alerts raised where the link runs, from a real simulator over rosbridge: shown to every live
+socket, kept in the database, taken over with their start by the next raiser, acknowledged."""
+
+import asyncio
+import uuid
+
+import pytest
+from asgiref.sync import sync_to_async
+
+from robot.alerts import engine as alerts_engine
+from robot.alerts.models import Alert
+from robot.alerts.services import alert_acknowledge, atell_raiser
+from robot.live.groups import ALERTS_KEY
+from tests.helpers import receive_until, ws_communicator
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+
+@pytest.fixture
+def sim():
+    from robot.sim.harness import SimThread
+
+    with SimThread(port=0, video_port=0, startup_s=0.5, battery_soc=0.08) as running:
+        yield running
+
+
+@pytest.fixture
+async def raiser(link):
+    task = asyncio.ensure_future(alerts_engine.run_alerts(link))
+    yield task
+    task.cancel()
+    await asyncio.gather(task, return_exceptions=True)
+
+
+def on_now(frame: dict) -> dict[str, dict]:
+    return {a["key"]: a for a in frame["msg"]["alerts"]}
+
+
+async def alerts_frame(communicator, predicate, timeout=10.0) -> dict:
+    return await receive_until(
+        communicator, lambda f: f["kind"] == "update" and f["key"] == ALERTS_KEY and predicate(on_now(f)),
+        timeout=timeout)
+
+
+async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, viewer, operator):
+    communicator = ws_communicator(viewer)
+    assert (await communicator.connect(timeout=10))[0]
+    await communicator.send_json_to({"action": "watch", "keys": [ALERTS_KEY]})
+    battery = on_now(await alerts_frame(communicator, lambda on: "battery_low" in on))["battery_low"]
+    assert battery["severity"] == "critical" and battery["text"] == "Battery low: 8 %"
+
+    sim.call(lambda: sim.robot.rosout(16, "/move_base", "planner crashed"))
+    sim.call(lambda: sim.robot.rosout(8, "/move_base", "still broken"))
+    log = on_now(await alerts_frame(communicator, lambda on: on.get("log:/move_base", {}).get("count") == 2))
+    assert log["log:/move_base"]["text"] == "ERROR from /move_base: still broken"
+
+    for _ in range(250):
+        if await Alert.objects.filter(key="battery_low", ended_at=None).aexists():
+            break
+        await asyncio.sleep(0.02)
+    else:
+        raise AssertionError("the battery alert was not kept")
+    # The raiser stops (a link handing over); the next takes the open alerts over with their id and start.
+    raiser.cancel()
+    await asyncio.gather(raiser, return_exceptions=True)
+    second = asyncio.ensure_future(alerts_engine.run_alerts(link))
+    try:
+        again = await alerts_frame(communicator, lambda on: "battery_low" in on and "log:/move_base" in on)
+        assert on_now(again)["battery_low"]["id"] == battery["id"]
+        assert on_now(again)["battery_low"]["started_at"] == pytest.approx(battery["started_at"], abs=1e-3)
+
+        # Acknowledged by an operator: an event ends (kept with who and when); a viewer may not.
+        with pytest.raises(Exception, match="operators"):
+            await sync_to_async(alert_acknowledge)(user=viewer, alert_id=log["log:/move_base"]["id"])
+        acked = await sync_to_async(alert_acknowledge)(user=operator, alert_id=log["log:/move_base"]["id"])
+        await atell_raiser(alert_id=acked["id"], by=acked["acked_by"], at=acked["acked_at"])
+        await alerts_frame(communicator, lambda on: "log:/move_base" not in on)
+        row = await Alert.objects.aget(id=uuid.UUID(acked["id"]))
+        assert row.acked_by_name == operator.username and row.ended_at is not None and row.count == 2
+    finally:
+        second.cancel()
+        await asyncio.gather(second, return_exceptions=True)
+    await communicator.disconnect()
+
+
+async def test_the_estop_raises_a_critical_alert_until_it_is_released(link, sim, raiser, viewer, operator):
+    from robot.teleop.estop import estop_release, estop_run
+
+    communicator = ws_communicator(viewer)
+    assert (await communicator.connect(timeout=10))[0]
+    await communicator.send_json_to({"action": "watch", "keys": [ALERTS_KEY]})
+    await alerts_frame(communicator, lambda on: "battery_low" in on)
+    await estop_run(user=operator, source="api")
+    estop = on_now(await alerts_frame(communicator, lambda on: "estop" in on))["estop"]
+    assert estop["severity"] == "critical" and operator.username in estop["text"]
+    await estop_release(user=operator, source="api", confirm=True)
+    await alerts_frame(communicator, lambda on: "estop" not in on)
+    await communicator.disconnect()
