@@ -17,14 +17,14 @@ from contextvars import ContextVar
 from typing import Any, cast
 
 from asgiref.sync import async_to_sync
-from channels.layers import get_channel_layer
 from django.conf import settings
 
 from robot import interface as ri
 from robot.link import connection as link_module
-from robot.link import direct, redisqueue
+from robot.link import direct
 from robot.link.connection import RobotLink
-from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, STATUS_KEY, LinkReply, LinkRequest
+from robot.live import queues
+from robot.live.groups import STATUS_KEY, LinkReply, LinkRequest
 from robot.live.state import get_store, redis_key, status_view
 from robot.supervisor import supervise
 
@@ -138,10 +138,10 @@ def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest
     return request
 
 
-async def aping_over_layer(timeout: float) -> bool:
-    """Does the link answer over the request channel (never the in-process shortcut)?"""
+async def aping_over_queue(timeout: float) -> bool:
+    """Does the link answer over the request queue (never the in-process shortcut)?"""
     try:
-        reply = await asyncio.wait_for(_via_layer(_new_request("ping", timeout, {})), timeout)
+        reply = await asyncio.wait_for(_via_queue(_new_request("ping", timeout, {})), timeout)
     except Exception:
         return False
     return bool(reply.get("ok"))
@@ -182,11 +182,11 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
             raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")
         if refusal := _not_responding(request, responding=view["responding"]):
             raise refusal
-    return await _via_layer(request)
+    return await _via_queue(request)
 
 
 async def _in_process(hosted: RobotLink, request: LinkRequest) -> LinkReply:
-    """The link lives in this process (embedded default): no channel-layer hop."""
+    """The link lives in this process (embedded default): no queue hop."""
     if asyncio.get_running_loop() is hosted.loop:
         return await hosted.execute(request)
     assert hosted.loop is not None  # set when the link starts, before it is hosted
@@ -195,35 +195,23 @@ async def _in_process(hosted: RobotLink, request: LinkRequest) -> LinkReply:
 
 
 class _Replies:
-    """Where the link's replies come back to this process: a Redis list of its own when
-    scaled (robot.link.redisqueue), a channel of the in-memory layer otherwise; read by one
-    supervised task that hands each reply to the request waiting for it."""
+    """Where the link's replies come back to this process: a queue of its own (robot.live.queues),
+    read by one supervised task that hands each reply to the request waiting for it."""
 
-    def __init__(self, layer: Any) -> None:
-        self.layer = layer
-        self.address = ""
+    def __init__(self) -> None:
+        self.address = redis_key(f"link-replies:{uuid.uuid4().hex}")
         self.waiting: dict[str, asyncio.Future] = {}
         self._task: asyncio.Task | None = None
 
-    async def reply_to(self) -> str:
-        if not self.address:
-            if settings.REDIS_URL:
-                self.address = REPLY_LIST_PREFIX + redis_key(f"link-replies:{uuid.uuid4().hex}")
-            else:
-                self.address = await self.layer.new_channel("robot-reply.")
+    def reply_to(self) -> str:
         if self._task is None or self._task.done():
             self._task = supervise(f"bus.replies.{self.address[-8:]}", self._receive)
         return self.address
 
     async def _receive(self) -> None:
         while True:
-            if self.address.startswith(REPLY_LIST_PREFIX):
-                reply = await redisqueue.pop(self.address.removeprefix(REPLY_LIST_PREFIX))
-                if reply is None:
-                    continue
-            else:
-                reply = await self.layer.receive(self.address)
-            future = self.waiting.pop(reply.get("request_id", ""), None)
+            reply = await queues.pop(self.address)
+            future = self.waiting.pop((reply or {}).get("request_id", ""), None)
             if future is not None and not future.done():
                 future.set_result(reply)
 
@@ -231,20 +219,16 @@ class _Replies:
 _replies: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, _Replies] = weakref.WeakKeyDictionary()
 
 
-async def _via_layer(request: LinkRequest) -> LinkReply:
-    """Send a request to the link and wait for its reply (the channel layer embedded, Redis lists scaled)."""
-    layer = get_channel_layer()
+async def _via_queue(request: LinkRequest) -> LinkReply:
+    """Send a request to the link's queue and wait for its reply."""
     loop = asyncio.get_running_loop()
     replies = _replies.get(loop)
-    if replies is None or replies.layer is not layer:
-        replies = _replies[loop] = _Replies(layer)
-    request["reply_to"] = await replies.reply_to()
+    if replies is None:
+        replies = _replies[loop] = _Replies()
+    request["reply_to"] = replies.reply_to()
     future = replies.waiting[request["request_id"]] = loop.create_future()
     try:
-        if settings.REDIS_URL:
-            await redisqueue.push(redisqueue.requests_key(), dict(request))
-        else:
-            await layer.send(LINK_CHANNEL, request)
+        await queues.push(queues.requests_key(), dict(request))
         return await future
     finally:
         replies.waiting.pop(request["request_id"], None)

@@ -15,14 +15,13 @@ import time
 import weakref
 from collections.abc import Callable
 
-from robot.link import redisqueue
 from robot.link.guard import CmdVelGuard
 from robot.link.liveness import watch_liveness
 from robot.link.rosclient import LinkRos, close_quietly
 from robot.link.serving import Serving
 from robot.link.subscriptions import REGISTRY_HOLDER, array_topics
+from robot.live import queues
 from robot.live.fanout import Coalescer
-from robot.live.groups import LINK_CHANNEL
 from robot.supervisor import cancel_and_wait, supervise
 
 log = logging.getLogger(__name__)
@@ -84,18 +83,15 @@ class RobotLink(Serving):
         self._stopped = True
         if self._serving is not None:
             try:
-                # Wake the loop's pop rather than cancel it: cancelling a Redis layer receive mid-BZPOPMIN
-                # can hang its connection, and a cancelled list pop could lose the request it took.
-                if self.request_queue:
-                    await self._wake_list_pop()
-                else:
-                    await asyncio.wait_for(self.layer.send(LINK_CHANNEL, {"type": "link.stop"}), 1)
+                # Wake the loop's pop rather than cancel it: a cancelled list pop could lose the request it took.
+                await asyncio.wait_for(queues.push(self.request_queue, {"type": "link.stop"}), 1)
             except Exception:
-                log.warning("could not tell the robot link's request loop to stop", exc_info=True)
+                log.warning("could not tell the robot link's request loop to stop; it stops after its current pop",
+                            exc_info=True)
             # The loop ends at the stop message, or after its current pop (a Redis list pop returns
             # within a second) if another link on the list took the message: a request it took is
             # served. (asyncio.wait: however the loop ended, cancelled or failed, the stop goes on.)
-            _, running = await asyncio.wait({self._serving}, timeout=redisqueue.POP_TIMEOUT_S + 1)
+            _, running = await asyncio.wait({self._serving}, timeout=queues.POP_TIMEOUT_S + 1)
             if running:
                 log.warning("robot link request loop did not stop in time")
         if self._inflight:
@@ -118,15 +114,6 @@ class RobotLink(Serving):
                 except TimeoutError:
                     log.warning("the rosbridge connection did not close in time; going on")
         self.connected = False
-
-    async def _wake_list_pop(self) -> None:
-        try:
-            await asyncio.wait_for(redisqueue.push(self.request_queue, {"type": "link.stop"}), 1)
-        except Exception:
-            log.debug("could not wake the request loop; it stops after its current pop", exc_info=True)
-
-
-
 
 
 def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:

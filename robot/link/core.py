@@ -36,7 +36,7 @@ class LinkCore:
         max_backoff_s: float = 2.0,
         service_timeout_s: float = 5.0,
         guard_settings: dict[str, float] | None = None,
-        request_queue: str = "",
+        request_queue: str,
         lease: Lease | None = None,
     ) -> None:
         self.url = url
@@ -69,7 +69,7 @@ class LinkCore:
         self._inflight: set[asyncio.Future] = set()
         self._guard_settings = guard_settings or {"rate_hz": 10.0, "hold_s": 1.0, "deadman_s": 0.35}
         self.guard: CmdVelGuard | None = None
-        self.request_queue = request_queue  # scaled: requests arrive on this Redis list (robot.link.redisqueue)
+        self.request_queue = request_queue  # requests arrive on this queue (robot.live.queues)
         self.command_path = True  # until a ping over the request channel goes unanswered
         # Liveness (robot.link.liveness): when the robot last said anything (a message, a rosapi answer),
         # and whether that was recent enough to call it responding.

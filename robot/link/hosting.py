@@ -17,10 +17,11 @@ from django.conf import settings
 
 from cyborg_site.drain import daphne_reactor
 from robot.link import connection as link_module
-from robot.link import direct, redisqueue
-from robot.link.bus import aping_over_layer
+from robot.link import direct
+from robot.link.bus import aping_over_queue
 from robot.link.connection import RobotLink
 from robot.link.lease import Lease
+from robot.live import queues
 from robot.live.state import get_store
 from robot.supervisor import cancel_and_wait, supervise
 
@@ -49,7 +50,7 @@ async def start_link(
         layer=get_channel_layer(),
         max_backoff_s=settings.ROBOT_LINK_MAX_BACKOFF_S,
         service_timeout_s=settings.ROBOT_REQUEST_TIMEOUT_S,
-        request_queue=redisqueue.requests_key() if settings.REDIS_URL else "",
+        request_queue=queues.requests_key(),
         guard_settings={"rate_hz": settings.TELEOP_RATE_HZ, "hold_s": settings.ESTOP_HOLD_S,
                         "deadman_s": settings.TELEOP_LINK_DEADMAN_S},
         lease=lease,
@@ -88,7 +89,7 @@ async def probe_command_path(link: RobotLink) -> None:
     """Ping the link over the request channel every web process uses, and say what it found
     in the link's status: a dead request loop or channel layer shows as "command path down"."""
     while True:
-        await link.set_command_path(await aping_over_layer(PROBE_TIMEOUT_S))
+        await link.set_command_path(await aping_over_queue(PROBE_TIMEOUT_S))
         await asyncio.sleep(PROBE_INTERVAL_S)
 
 

@@ -12,11 +12,11 @@ from typing import Any, cast
 import roslibpy
 
 from robot import interface as ri
-from robot.link import redisqueue
 from robot.link.core import RECONNECT_INTERVAL_S
 from robot.link.rosclient import call_service
 from robot.link.subscriptions import Subscriptions
-from robot.live.groups import LINK_CHANNEL, REPLY_LIST_PREFIX, LinkReply, LinkRequest
+from robot.live import queues
+from robot.live.groups import LinkReply, LinkRequest
 
 log = logging.getLogger(__name__)
 
@@ -36,12 +36,9 @@ def register_operation(op: str, operation: Operation) -> None:
 class Serving(Subscriptions):
     async def _serve(self) -> None:
         while not self._stopped:
-            if self.request_queue:
-                request = await redisqueue.pop(self.request_queue)
-                if request is None:
-                    continue
-            else:
-                request = await self.layer.receive(LINK_CHANNEL)
+            request = await queues.pop(self.request_queue)
+            if request is None:
+                continue
             if request.get("type") == "link.stop":
                 if self._stopped:
                     return
@@ -66,11 +63,8 @@ class Serving(Subscriptions):
         if reply is None:
             return
         reply.update({"type": "link.reply", "request_id": request.get("request_id", "")})
-        reply_to = request.get("reply_to") or ""
-        if reply_to.startswith(REPLY_LIST_PREFIX):
-            await redisqueue.push(reply_to.removeprefix(REPLY_LIST_PREFIX), dict(reply))
-        elif reply_to:
-            await self.layer.send(reply_to, reply)
+        if reply_to := request.get("reply_to"):
+            await queues.push(reply_to, dict(reply))
 
     async def execute(self, request: LinkRequest) -> LinkReply:
         op = request.get("op")
