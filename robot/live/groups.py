@@ -7,10 +7,6 @@ from __future__ import annotations
 
 from typing import Any, Literal, TypedDict
 
-# The robot link listens on this channel for requests from web processes and tasks.
-LINK_CHANNEL = "robot-link"
-# A request's reply_to with this prefix names a Redis list the link pushes its reply onto.
-REPLY_LIST_PREFIX = "redis-list:"
 # Every drive page hears who holds the driving lock.
 LOCK_GROUP = "teleop.lock"
 # Listening pages hear the robot's microphone; audio pages hear who holds the talk lock.
