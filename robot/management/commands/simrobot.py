@@ -27,6 +27,7 @@ class Command(BaseCommand):
         parser.add_argument("--demo-s", type=float, default=30.0, help="seconds a demo lasts")
         parser.add_argument("--mic-coding", default="wave", choices=list(MIC_CODINGS),
                             help="what the microphone sends: raw PCM (wave) or mp3")
+        parser.add_argument("--battery-soc", type=float, default=0.85, help="the battery's charge at start, 0-1")
         parser.add_argument("--time-scale", type=float, default=1.0,
                             help="the robot's world runs this many times as fast (motion, timers, pauses)")
 
@@ -38,7 +39,7 @@ class Command(BaseCommand):
             map_name=str(opts["map"]), seed=int(opts["seed"]),
             pose_rate_hz=float(opts["pose_rate"]), startup_s=float(opts["startup_s"]),
             demo_s=float(opts["demo_s"]), mic_coding=str(opts["mic_coding"]),
-            time_scale=float(opts["time_scale"]),
+            time_scale=float(opts["time_scale"]), battery_soc=float(opts["battery_soc"]),
         )
         asyncio.run(self._serve(robot))
 
