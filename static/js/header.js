@@ -1,5 +1,6 @@
 // The header on every page: the robot link pill follows the live socket's status; on a
 // phone the pages and the account sit behind the menu button.
+import { initAlertStrip } from "./alert-strip.js";
 import { live } from "./live.js";
 
 const header = document.querySelector(".topbar");
@@ -38,3 +39,5 @@ live.onStatus((status) => {
     : hung ? "Connected, but the robot has not answered for a while: commands are refused until it does"
     : status.url || "";
 });
+
+initAlertStrip(document.getElementById("alert-strip"), document.getElementById("header-battery"));
