@@ -293,6 +293,19 @@ TOPICS_ECHO_MAX_HZ = env_float("TOPICS_ECHO_MAX_HZ", 20.0, minimum=0.5)
 # Values older than this are shown as stale (greyed) on the pages.
 STALE_AFTER_S = env_float("STALE_AFTER_S", 10.0, minimum=0.5)
 BATTERY_LOW_PERCENT = env_float("BATTERY_LOW_PERCENT", 20.0, minimum=0)
+# A connected robot that says nothing (no message, no rosapi answer) for this long is "not responding".
+ROBOT_HANG_S = env_float("ROBOT_HANG_S", 2.0, minimum=0.5)
+# Alerts beyond the tab (robot.alerts.delivery): Web Push with VAPID (a key pair is generated into
+# VAR_DIR/vapid_private.pem when none is given), e-mail through Django's mail, webhooks from the admin.
+VAPID_PRIVATE_KEY_FILE = env_str("VAPID_PRIVATE_KEY_FILE", "")
+VAPID_SUBJECT = env_str("VAPID_SUBJECT", "mailto:cyborg@localhost")
+EMAIL_HOST = env_str("EMAIL_HOST", "localhost")
+EMAIL_PORT = env_int("EMAIL_PORT", 25, minimum=1)
+EMAIL_HOST_USER = env_str("EMAIL_HOST_USER", "")
+EMAIL_HOST_PASSWORD = env_str("EMAIL_HOST_PASSWORD", "")
+EMAIL_USE_TLS = env_bool("EMAIL_USE_TLS", False)
+EMAIL_TIMEOUT = 10
+DEFAULT_FROM_EMAIL = env_str("DEFAULT_FROM_EMAIL", "Cyborg Commander <cyborg@localhost>")
 # Embedded default: host the link inside the Daphne process (off only for special setups).
 ROBOT_LINK_EMBEDDED = env_bool("ROBOT_LINK_EMBEDDED", True)
 
