@@ -1,7 +1,8 @@
 """Every page in a real browser, at a desktop and a phone width: one live socket, no errors,
 navigation to every page, nothing wider than the screen, no control under another element
 (a notice showing included), a compact header on a phone. The admin pages operators use and
-the API docs get the same layout and navigation checks."""
+the API docs get the same layout and navigation checks. On every page, at rest at its top and its
+bottom, the E-STOP is on screen, what a tap at its centre hits, and on or beside no control."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from playwright.sync_api import expect
 
-from tests.browser.checks import COVERED_CONTROLS, HORIZONTAL_OVERFLOW
+from tests.browser.checks import COVERED_CONTROLS, ESTOP_CLEAR, HORIZONTAL_OVERFLOW
 from tests.browser.support import PHONE, fresh_page, login
 
 pytestmark = pytest.mark.browser
@@ -61,6 +62,10 @@ SHOW_NOTICE = """async () => {
     const src = [...document.scripts].find((s) => s.src.includes('/js/header.js')).src;
     const { notify } = await import(src.replace('header.js', 'notices.js'));
     notify('A long notice that must cover no control, card heading or the emergency stop', 'error', {timeout: 0});
+}"""
+LONG_TOPIC = """() => {
+    const name = '/cyborg_navigation/move_base/global_costmap/obstacle_layer/parameter_descriptions';
+    document.getElementById('topic').add(new Option(name, name, true, true));
 }"""
 
 
@@ -197,3 +202,18 @@ def test_the_header_menu_opens_and_closes_on_a_phone(browser, stack):
         page.click("#menu-btn")
         expect(page.locator(".mainnav")).to_be_hidden()
         expect(page.locator("#menu-btn")).to_contain_text(re.compile("Dashboard"))
+
+
+def test_the_estop_is_on_every_page_on_screen_clickable_and_clear_of_every_control(sized_page, stack, rows):
+    page = sized_page
+    login(page, stack, "ada")
+    for path in [*our_pages(page, stack), *THEIR_PAGES]:
+        if path in THEIR_PAGES:
+            open_their_page(page, stack, path)
+        else:
+            page.goto(f"{stack.url}{path}")
+            settle(page, path)
+        if path == "/history/":  # a recorded topic with a long name in the Topic list
+            page.evaluate(LONG_TOPIC)
+        assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0, f"{path} scrolls sideways at {page.viewport['width']} px"
+        assert page.evaluate(ESTOP_CLEAR) == [], path
