@@ -140,3 +140,34 @@ async def test_an_estop_keeps_the_seconds_before_it_at_full_rate_camera_included
     assert stamps and stamps[0] - incident.start < 0.5 and incident.end - stamps[-1] < 0.5
     assert len([t for t in stamps if t < pressed]) >= 20  # the simulator's pose at 10 Hz
     assert black_box.lost == 0 and camera.lost == 0
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_a_marked_moment_from_another_process_is_captured_across_a_restart(recording, sim, link, settings):
+    settings.INCIDENT_BEFORE_S = 2.0
+    settings.INCIDENT_AFTER_S = 3.0
+    odom = ri.topic("odom").name
+    first = asyncio.ensure_future(blackbox.run_blackbox(link))
+    await async_wait_until(lambda: blackbox.current is not None and blackbox.current.received > 30, timeout=10,
+                           what="the black box hearing the robot")
+    await asyncio.sleep(settings.INCIDENT_BEFORE_S + 0.5)  # its ring holds the seconds before the mark
+    # A web process marks the moment: only the database tells the black box.
+    incident = await sync_to_async(incident_open)(kind=Incident.Kind.MANUAL, t=time.time(), by="otto")
+    await asyncio.sleep(1.5)
+    first.cancel()  # the link's process stops (a deploy, a failover) in the middle of the window
+    await asyncio.gather(first, return_exceptions=True)
+    second = asyncio.ensure_future(blackbox.run_blackbox(link))
+    try:
+        await asyncio.sleep(incident.end - time.time() + 1.5)
+    finally:
+        second.cancel()
+        await asyncio.gather(second, return_exceptions=True)
+
+    seqs = await sync_to_async(lambda: sorted(
+        d["header"]["seq"] for d in Sample.objects.filter(topic=odom).values_list("data", flat=True)))()
+    # The minute before and what came after the restart are there, every message numbered in between too:
+    # what the first black box took it wrote on stopping, and the second one picked the incident up.
+    assert len(seqs) >= 30 and seqs == list(range(seqs[0], seqs[-1] + 1))
+    stamps = await sync_to_async(lambda: sorted(
+        a.timestamp() for a in Sample.objects.filter(topic=odom).values_list("received_at", flat=True)))()
+    assert stamps[0] - incident.start < 0.5 and incident.end - stamps[-1] < 0.5
