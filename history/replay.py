@@ -17,6 +17,7 @@ from typing import Any
 
 from django.conf import settings
 from django.db.models import Max, Min
+from django.urls import reverse
 
 from history.frames import frame_at
 from history.models import CameraFrame, Incident, Sample
@@ -98,7 +99,11 @@ def trail(start: float, end: float) -> list[list[float]]:
 
 
 def frame_info(frame: CameraFrame | None) -> dict[str, Any] | None:
-    return None if frame is None else {"id": frame.pk, "t": frame.t, "url": f"/api/history/frames/{frame.pk}.jpg"}
+    return None if frame is None else {"id": frame.pk, "t": frame.t, "url": frame_url(frame.pk)}
+
+
+def frame_url(frame_id: int) -> str:
+    return reverse("history-frame", args=[frame_id])
 
 
 def map_at(t: float) -> dict[str, Any] | None:
@@ -107,7 +112,7 @@ def map_at(t: float) -> dict[str, Any] | None:
     if sample_id is None:
         return None
     version, geometry = rendered_map(sample_id)
-    return {"id": sample_id, "version": version, "url": f"/api/history/replay/map/{sample_id}.png", **geometry}
+    return {"id": sample_id, "version": version, "url": reverse("history-replay-map", args=[sample_id]), **geometry}
 
 
 def replay_map_dir() -> Path:
@@ -172,7 +177,7 @@ def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) ->
         "start": start, "end": end, "poses": poses, "changes": changes,
         "log": log_lines(start, end) if ri.topic("rosout").name not in hidden else [],
         "commands": commands(start, end),
-        "frames": [[round(ft, 3), fid] for ft, fid in frames],
+        "frames": [[round(ft, 3), fid, frame_url(fid)] for ft, fid in frames],
         "maps": [map_at(at.timestamp()) for at in maps.values_list("received_at", flat=True)],
     }
 

@@ -6,6 +6,7 @@ import time
 from typing import Any
 
 from django.http import FileResponse, Http404, HttpResponse
+from django.urls import reverse
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import exceptions, status
 from rest_framework.decorators import api_view
@@ -90,8 +91,8 @@ def incident_out(incident: Incident) -> dict[str, Any]:
         "driver": incident.driver, "triggers": incident.triggers, "complete": incident.complete,
         "held": incident.held, "released_by": incident.released_by,
         "thumbnail": replay.frame_info(thumb)["url"] if thumb else None,  # type: ignore[index]
-        "replay": f"/history/replay/?incident={incident.pk}",
-        "mcap": f"/api/history/incidents/{incident.pk}/mcap/",
+        "replay": f"{reverse('history:replay')}?incident={incident.pk}",
+        "mcap": reverse("history-incident-mcap", args=[incident.pk]),
     }
 
 

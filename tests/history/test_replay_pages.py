@@ -47,3 +47,15 @@ def test_the_incidents_page_lists_thumbnail_driver_and_links(client, viewer, ope
     assert 'id="mark"' in client.get("/history/incidents/").content.decode()
     client.force_login(admin_user)
     assert "data-release" in client.get("/history/incidents/").content.decode()
+
+
+def test_an_audit_row_and_the_history_page_lead_into_replay(client, viewer, db):
+    from robot.models import AuditEntry
+
+    entry = AuditEntry.objects.create(username="otto", source="page", action="mode", ok=True)
+    client.force_login(viewer)
+    assert f'href="/history/replay/?audit={entry.pk}"' in client.get("/activity/").content.decode()
+    history = client.get("/history/").content.decode()
+    assert 'href="/history/replay/"' in history and 'href="/history/incidents/"' in history
+    config = _config(client.get(f"/history/replay/?audit={entry.pk}").content.decode())
+    assert config["t"] == entry.created.timestamp() and config["start"] < config["t"] < config["end"]

@@ -45,8 +45,7 @@ export class Timeline {
     const pose = p >= 0 ? this.poses[p] : this.seek.pose;
     const trail = [...this.seek.trail, ...this.poses.slice(0, p + 1)].filter((q) => q[0] >= t - 60);
     const f = lastAtOrBefore(this.frames, t);
-    const frame = f >= 0 ? { id: this.frames[f][1], t: this.frames[f][0], url: `/api/history/frames/${this.frames[f][1]}.jpg` }
-      : this.seek.frame;
+    const frame = f >= 0 ? { id: this.frames[f][1], t: this.frames[f][0], url: this.frames[f][2] } : this.seek.frame;
     const m = lastAtOrBefore(this.maps, t, (item) => item.t || 0);
     const byTime = (item) => item.t;
     const log = [...this.seek.log, ...this.log.slice(0, lastAtOrBefore(this.log, t, byTime) + 1)].slice(-30);
