@@ -3,6 +3,7 @@
 from django.urls import path
 
 from dashboard.views.activity import activity
+from dashboard.views.alerts import alerts_page
 from dashboard.views.drive import drive
 from dashboard.views.health import healthz
 from dashboard.views.home import home
@@ -18,6 +19,7 @@ urlpatterns = [
     path("", home, name="home"),
     path("healthz", healthz, name="healthz"),
     path("activity/", activity, name="activity"),
+    path("alerts/", alerts_page, name="alerts"),
     path("map/", map_page, name="map"),
     path("map/image/<str:version>.png", map_image, name="map-image"),
     path("map/costmap/<str:layer>/<str:version>/<str:name>.png", costmap_tile, name="costmap-tile"),

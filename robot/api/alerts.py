@@ -8,10 +8,12 @@ from rest_framework import serializers
 from rest_framework.request import Request
 from rest_framework.response import Response
 
+from robot.alerts.choices import alert_choice, alert_choice_set, push_subscribe, push_unsubscribe
 from robot.alerts.selectors import alerts_history, alerts_on
 from robot.alerts.services import alert_acknowledge, atell_raiser
 from robot.api.base import robot_api_view
 from robot.api.common import error_responses
+from robot.api.validation import body_object
 
 AlertOut = inline_serializer(name="Alert", fields={
     "id": serializers.CharField(), "key": serializers.CharField(), "kind": serializers.CharField(),
@@ -37,3 +39,36 @@ def acknowledge_view(request: Request, alert_id: str) -> Response:
     alert = alert_acknowledge(user=request.user, alert_id=alert_id)
     async_to_sync(atell_raiser)(alert_id=alert["id"], by=alert["acked_by"], at=alert["acked_at"])
     return Response(alert)
+
+
+Choice = inline_serializer(name="AlertChoice", fields={
+    "by_email": serializers.BooleanField(), "by_push": serializers.BooleanField(),
+    "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField()})
+
+
+@extend_schema(methods=["GET"], responses={200: Choice}, summary="Which alerts reach you outside the page")
+@extend_schema(methods=["PATCH"], request=Choice, responses={200: Choice, **error_responses(400)},
+               summary="Choose which alerts reach you (e-mail, Web Push) and from which severity")
+@robot_api_view(["GET", "PATCH"])
+def alert_choice_view(request: Request) -> Response:
+    if request.method == "PATCH":
+        return Response(alert_choice_set(request.user, body_object(request)))
+    return Response(alert_choice(request.user))
+
+
+Subscription = inline_serializer(name="PushSubscription", fields={
+    "endpoint": serializers.URLField(), "keys": serializers.DictField(child=serializers.CharField())})
+
+
+@extend_schema(methods=["POST"], request=Subscription, responses={204: None, **error_responses(400)},
+               summary="Get Web Push alerts in this browser (its PushSubscription)")
+@extend_schema(methods=["DELETE"], request=Subscription, responses={204: None},
+               summary="Stop Web Push alerts in this browser")
+@robot_api_view(["POST", "DELETE"])
+def push_subscription_view(request: Request) -> Response:
+    data = body_object(request)
+    if request.method == "DELETE":
+        push_unsubscribe(request.user, data.get("endpoint"))
+    else:
+        push_subscribe(request.user, data)
+    return Response(status=204)
