@@ -175,4 +175,4 @@ def timeline_view(request: Request) -> Response:
     q.is_valid(raise_exception=True)
     t = state_timeline(start=q.validated_data["start"], end=q.validated_data["end"])
     return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals,
-                     "spans": [{"start": lo, "end": hi} for lo, hi in t.spans]})
+                     "counts": t.counts, "spans": [{"start": lo, "end": hi} for lo, hi in t.spans]})

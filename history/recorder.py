@@ -23,6 +23,7 @@ from django.conf import settings
 from history.models import Mode
 from history.policies import Policy, load_policies
 from history.sampling import is_due, latest_key
+from history.sessions import SessionNotes
 from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
 
 log = logging.getLogger(__name__)
@@ -90,6 +91,7 @@ class Recorder:
         self._previous: dict[str, list[Any]] = {}
         self.gap_lost: dict[str, int] = {}  # messages lost between the previous recorder and this one
         self.lost_total: dict[str, int] = {}  # the same, summed over every recorder since Redis started
+        self.sessions = SessionNotes()
 
     # --- on the event-loop thread: never blocks --------------------------------------
 
@@ -211,6 +213,7 @@ class Recorder:
                 except TimeoutError:
                     pass
                 self._full.clear()
+                self._note_link(link)
                 await self.flush()
                 await self.publish_latest(link.store)
         finally:
@@ -221,6 +224,10 @@ class Recorder:
                 await self.publish_latest(link.store)
             except Exception:
                 log.warning("history: could not leave the recorder's watermark on stopping", exc_info=True)
+
+    def _note_link(self, link: Any) -> None:
+        if hasattr(link, "connected"):
+            self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since, now=time.time()))
 
     async def reload(self, link: Any) -> None:
         try:

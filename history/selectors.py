@@ -11,6 +11,7 @@ from django.db import connection
 
 from history.models import Mode, Sample, TopicPolicy
 from history.rollup import numeric_leaves
+from history.sessions import OFFLINE, SESSION_TOPIC
 from history.storage import utc
 from robot import interface as ri
 
@@ -74,6 +75,7 @@ class Timeline:
     end: float
     segments: list[dict[str, Any]] = field(default_factory=list)  # {"state", "start", "end"}
     totals: dict[str, float] = field(default_factory=dict)  # seconds per state
+    counts: dict[str, int] = field(default_factory=dict)  # times each state was entered
     spans: list[tuple[float, float]] = field(default_factory=list)  # when data was recorded at all
 
 
@@ -103,22 +105,36 @@ def recorded_spans(t0: float, t1: float, gap_s: float = GAP_S) -> list[tuple[flo
 
 def state_timeline(*, start: datetime, end: datetime, now: float | None = None) -> Timeline:
     """Time spent per state-machine state between start and end, from recorded state changes,
-    counting only the time the recording covers (a robot that ran ten minutes shows ten minutes)."""
+    counting only the time the recording covers (a robot that ran ten minutes shows ten minutes).
+    While the link had lost the robot the time is "offline"; after it came back the state is the one
+    the robot's next transition left (a restarted robot's ``startup``), never the one before."""
     topic = ri.topic("state_change").name
     t0, t1 = start.timestamp(), min(end.timestamp(), now or time.time())
-    before = (
+    topics = [topic, SESSION_TOPIC]
+    before = list(
         Sample.objects.filter(topic=topic, received_at__lt=start).order_by("-received_at")
-        .values_list("received_at", "data").first()
+        .values_list("received_at", "topic", "data")[:1]
+    ) + list(
+        Sample.objects.filter(topic=SESSION_TOPIC, received_at__lt=start).order_by("-received_at")
+        .values_list("received_at", "topic", "data")[:1]
     )
-    changes = list(
-        Sample.objects.filter(topic=topic, received_at__gte=start, received_at__lt=utc(t1))
-        .order_by("received_at", "id").values_list("received_at", "data")
+    events = sorted(before) + list(
+        Sample.objects.filter(topic__in=topics, received_at__gte=start, received_at__lt=utc(t1))
+        .order_by("received_at", "id").values_list("received_at", "topic", "data")
     )
     timeline = Timeline(start=t0, end=t1, spans=recorded_spans(t0, t1))
-    state = before[1].get("to_system_state") if before else None
+    state: str | None = None
     since = t0
-    for received_at, data in changes:
-        at = received_at.timestamp()
+    for received_at, name, data in events:
+        at = max(received_at.timestamp(), t0)
+        if name == SESSION_TOPIC:
+            if data.get("connected"):
+                _close(timeline, state, since, at)
+                state, since = None, at  # unknown until the robot's next transition
+            elif state != OFFLINE:
+                _close(timeline, state, since, at)
+                state, since = OFFLINE, at
+            continue
         if state is None:
             state = data.get("from_system_state") or None
         _close(timeline, state, since, at)
@@ -140,4 +156,6 @@ def _close(timeline: Timeline, state: str | None, start: float, end: float) -> N
             last["end"] = hi
         else:
             timeline.segments.append({"state": state, "start": lo, "end": hi})
+            if last is None or last["state"] != state:
+                timeline.counts[state] = timeline.counts.get(state, 0) + 1
         timeline.totals[state] = timeline.totals.get(state, 0.0) + (hi - lo)

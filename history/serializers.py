@@ -173,6 +173,7 @@ class TimelineOut(serializers.Serializer):
     end = serializers.FloatField(help_text="epoch seconds")
     segments = TimelineSegmentOut(many=True)
     totals = serializers.DictField(child=serializers.FloatField(), help_text="Seconds spent per state")
+    counts = serializers.DictField(child=serializers.IntegerField(), help_text="Times each state was entered")
     spans = SpanOut(many=True, help_text="When anything was recorded at all; only these count")
 
 

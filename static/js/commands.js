@@ -8,7 +8,7 @@ import { site } from "./config.js";
 import { live } from "./live.js";
 import { formatTime } from "./time.js";
 
-const KEYS = ["state_change", "state_transitions", "mode_request"];
+const KEYS = ["state_change", "smach_status", "state_transitions", "mode_request"];
 
 // Send one command; resolves to the API's answer, or null after telling the user what failed.
 export async function sendCommand(command, body, { control = null, result = null } = {}) {
@@ -56,7 +56,7 @@ export function initCommands(root = document) {
   const set = (name, text) => field(name).forEach((el) => { el.textContent = text; });
   const configEl = root.querySelector("[data-commands='mode'][data-config]");
   const config = configEl ? JSON.parse(configEl.dataset.config) : null;
-  const seen = { request: null, requestAt: 0, state: null, since: null };
+  const seen = { request: null, requestAt: 0, change: null, top: null, since: null };
 
   function resultFor(el) {
     const name = el.dataset.resultTarget || el.dataset.command;
@@ -117,10 +117,19 @@ export function initCommands(root = document) {
     return r;
   }
 
+  // Where the state machine is: the newer of its last transition and its introspection's top-level
+  // active state, and neither from before the robot (re)connected (a restarted robot is in startup,
+  // whatever it said before).
+  function currentState() {
+    const fresh = [seen.change, seen.top].filter((s) => s && (!seen.since || s.t >= seen.since));
+    fresh.sort((a, b) => b.t - a.t);
+    return fresh[0]?.state ?? null;
+  }
+
   function renderMode() {
     if (!config) return;
     const r = currentRequest();
-    const state = seen.state;
+    const state = currentState();
     root.querySelectorAll("[data-mode]").forEach((b) => {
       const on = r?.mode === b.dataset.mode;
       b.classList.toggle("active", on);
@@ -147,7 +156,13 @@ export function initCommands(root = document) {
   }
 
   function onUpdate(frame) {
-    if (frame.key === "state_change") seen.state = frame.msg.to_system_state;
+    if (frame.key === "state_change") seen.change = { state: frame.msg.to_system_state, t: frame.t };
+    else if (frame.key === "smach_status") {
+      // The top container (one level deep, /SM_ROOT) names the top-level state.
+      if ((frame.msg.path.match(/\//g) || []).length !== 1) return;
+      const active = frame.msg.active_states?.[0];
+      seen.top = active ? { state: active, t: frame.t } : null;
+    }
     else if (frame.key === "state_transitions") renderEvents(frame.msg);
     else if (frame.key === "mode_request") {
       seen.request = frame.msg;

@@ -32,6 +32,10 @@ def test_a_robot_restart_greys_the_camera_disables_driving_and_leaves_no_stale_s
             expect(drive.locator("#lock-acquire")).to_be_visible()
             expect(drive.locator("#drive-offline")).to_be_hidden()
 
+        # The robot in demo before it restarts: afterwards nothing may still say so.
+        dashboards[0].click('#card-mode [data-mode="demo"]')
+        for dashboard in dashboards:
+            expect(dashboard.locator('#card-mode [data-field="mode.reached"]')).to_contain_text("demo", timeout=15_000)
         stack.stop_sim()
         try:
             for drive in drives:
@@ -61,6 +65,10 @@ def test_a_robot_restart_greys_the_camera_disables_driving_and_leaves_no_stale_s
             stack.start_sim()
             stack.wait_robot_online()
 
+        for dashboard in dashboards:
+            # Back in startup (which lasts 15 s before its first transition): the cards say so at once.
+            expect(dashboard.locator('#card-mode [data-field="mode.reached"]')).to_have_text("startup", timeout=5_000)
+            expect(dashboard.locator('[data-field="smach.current"]')).to_have_text("startup", timeout=5_000)
         for drive in drives:
             expect(drive.locator("#drive-offline")).to_be_hidden(timeout=15_000)
             expect(drive.locator("#lock-acquire")).to_be_visible()

@@ -6,6 +6,7 @@ from django.test import Client
 
 from history.models import Mode, TopicPolicy
 from history.selectors import numeric_fields, state_timeline
+from history.sessions import SESSION_TOPIC, SESSION_TYPE, SessionNotes
 from history.storage import utc, write_rows
 from robot import interface as ri
 
@@ -129,6 +130,7 @@ def test_it_serves_the_timeline(viewer_api):
 
     assert res.status_code == 200
     assert res.json()["totals"] == pytest.approx({"idle": 10}, abs=0.01)
+    assert res.json()["counts"] == {"idle": 1}
     assert res.json()["spans"] == [{"start": pytest.approx(t0 + 10, abs=0.01), "end": pytest.approx(t0 + 20)}]
 
 
@@ -165,3 +167,62 @@ def test_it_marks_text_topics_for_the_table_view(viewer):
     config = json.loads(html.split('id="history-config" type="application/json">')[1].split("</script>")[0])
     assert {t["topic"]: (t["fields"], t["text"]) for t in config["topics"]} == {
         speech.name: ([], True), battery.name: (["data"], False)}
+
+
+def _link(t0: float, events: list[tuple[float, bool]]) -> None:
+    write_rows([(SESSION_TOPIC, SESSION_TYPE, t0 + at, json.dumps({"connected": connected}))
+                for at, connected in events])
+
+
+def test_it_books_a_robot_restart_as_offline_then_startup_and_counts_each_startup(db):
+    t0 = time.time() - 3600
+    _battery_every_10_s(t0, 300)
+    # Started, went to demo; the robot restarted at 100 (back at 110) and left startup at 125.
+    _state_changes(t0, [(0, "suspension", "startup"), (15, "startup", "suspension"), (40, "suspension", "demo"),
+                        (125, "startup", "suspension")])
+    _link(t0, [(100, False), (110, True)])
+
+    timeline = state_timeline(start=utc(t0), end=utc(t0 + 200))
+
+    assert [s["state"] for s in timeline.segments] == ["startup", "suspension", "demo", "offline", "startup",
+                                                       "suspension"]
+    assert timeline.totals == pytest.approx({"startup": 15 + 15, "suspension": 25 + 75, "demo": 60, "offline": 10},
+                                            abs=0.01)
+    assert timeline.counts == {"startup": 2, "suspension": 2, "demo": 1, "offline": 1}
+
+
+def test_it_books_an_outage_the_recorder_saw_as_offline_though_nothing_else_was_recorded(db):
+    t0 = time.time() - 3600
+    _battery_every_10_s(t0, 60)
+    _state_changes(t0, [(0, "startup", "suspension")])
+    _link(t0, [(60, False), (120, False), (180, False), (240, False), (270, True)])
+    _battery_every_10_s(t0 + 270, 60)
+
+    timeline = state_timeline(start=utc(t0), end=utc(t0 + 330))
+
+    assert timeline.totals == pytest.approx({"suspension": 60, "offline": 210}, abs=0.01)
+
+
+def test_it_knows_no_state_after_a_reconnect_until_the_robot_names_one(db):
+    t0 = time.time() - 3600
+    _battery_every_10_s(t0, 100)
+    _state_changes(t0, [(0, "startup", "demo"), (80, "manual", "suspension")])
+    _link(t0, [(30, True)])  # the server (re)connected at 30: from then on "demo" is not known
+
+    timeline = state_timeline(start=utc(t0), end=utc(t0 + 100))
+
+    assert [s["state"] for s in timeline.segments] == ["demo", "manual", "suspension"]
+    assert timeline.totals == pytest.approx({"demo": 30, "manual": 50, "suspension": 20}, abs=0.01)
+
+
+def test_the_recorder_notes_each_change_of_the_link_and_beats_while_the_robot_is_away():
+    notes = SessionNotes()
+
+    def row(connected: bool, t: float):
+        return [(SESSION_TOPIC, SESSION_TYPE, {"connected": connected}, t)]
+
+    assert notes.note(connected=False, since=5.0, now=10.0) == row(False, 5.0)
+    assert notes.note(connected=False, since=5.0, now=30.0) == []
+    assert notes.note(connected=False, since=5.0, now=70.0) == row(False, 70.0)
+    assert notes.note(connected=True, since=71.5, now=72.0) == row(True, 71.5)
+    assert notes.note(connected=True, since=71.5, now=900.0) == []
