@@ -14,7 +14,8 @@ from django.shortcuts import redirect
 from django.urls import path
 from django.utils.html import format_html
 
-from history.models import Mode, RecordingSettings, Sample, TopicPolicy
+from history.incidents import incident_release
+from history.models import Incident, Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
 from history.policy_audit import audit_default_interval, audit_policies, default_interval_now, policies_now
 from history.storage import samples_deleted
@@ -128,3 +129,24 @@ class SampleAdmin(admin.ModelAdmin):
             queryset.delete()
             for span in spans:
                 samples_deleted(topic=span["topic"], start=span["lo"].timestamp(), end=span["hi"].timestamp())
+
+
+@admin.register(Incident)
+class IncidentAdmin(admin.ModelAdmin):
+    """Incidents are made by the black box; an admin only reads them and releases them to retention."""
+
+    list_display = ("t", "kind", "summary", "by", "driver", "complete", "held", "released_by")
+    list_filter = ("kind", "held", "complete")
+    actions = ["release"]
+
+    def has_add_permission(self, request: HttpRequest) -> bool:
+        return False
+
+    def has_change_permission(self, request: HttpRequest, obj: Any = None) -> bool:
+        return False
+
+    @admin.action(description="Release to retention (its samples and frames age like the rest)")
+    def release(self, request: HttpRequest, queryset: QuerySet[Incident]) -> None:
+        for incident in queryset.filter(held=True):
+            incident_release(incident=incident, by=request.user.get_username())
+        self.message_user(request, "Released: retention may now delete what they held.", messages.SUCCESS)

@@ -59,3 +59,11 @@ def test_an_audit_row_and_the_history_page_lead_into_replay(client, viewer, db):
     assert 'href="/history/replay/"' in history and 'href="/history/incidents/"' in history
     config = _config(client.get(f"/history/replay/?audit={entry.pk}").content.decode())
     assert config["t"] == entry.created.timestamp() and config["start"] < config["t"] < config["end"]
+
+
+def test_an_admin_releases_incidents_in_the_admin(client, admin_user, incident):
+    client.force_login(admin_user)
+    assert client.get("/admin/history/incident/").status_code == 200
+    client.post("/admin/history/incident/", {"action": "release", "_selected_action": [incident.pk]})
+    incident.refresh_from_db()
+    assert not incident.held and incident.released_by == "ada"
