@@ -30,7 +30,7 @@ PROBE_EVERY_S = 0.5
 
 
 def hang_s() -> float:
-    return float(getattr(settings, "ROBOT_HANG_S", 2.0))
+    return float(settings.ROBOT_HANG_S)
 
 
 def judge(*, connected: bool, heard_at: float, now: float, hang: float) -> bool:
