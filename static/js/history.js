@@ -4,6 +4,7 @@
 import { getJSON, notify } from "./api.js";
 import { readConfig } from "./config.js";
 import { formatDuration, formatTime, parseSiteTime, toSiteInput, zone, zoneLabel } from "./time.js";
+import { renderTimeline } from "./timeline.js";
 
 const config = readConfig("history-config");
 const $ = (id) => document.getElementById(id);
@@ -227,28 +228,9 @@ async function timeline() {
   try {
     const data = await getJSON(`${config.urls.timeline}?${new URLSearchParams(r)}`);
     showView("timeline");
-    const total = Object.values(data.totals).reduce((a, b) => a + b, 0);
-    const states = Object.keys(data.totals).sort((a, b) => data.totals[b] - data.totals[a]);
-    const color = (state) => COLORS[states.indexOf(state) % COLORS.length];
-    $("timeline-bar").replaceChildren(...data.segments.map((seg) => {
-      const div = document.createElement("div");
-      div.className = "timeline-seg";
-      div.style.flexGrow = String(seg.end - seg.start);
-      div.style.background = color(seg.state);
-      div.title = `${seg.state}: ${formatDuration(seg.end - seg.start)}`;
-      return div;
-    }));
-    $("timeline-rows").replaceChildren(...states.map((state) => {
-      const tr = document.createElement("tr");
-      const share = total ? (100 * data.totals[state]) / total : 0;
-      for (const text of [state, formatDuration(data.totals[state]), `${share.toFixed(1)} %`]) {
-        const td = document.createElement("td");
-        td.textContent = text;
-        tr.append(td);
-      }
-      tr.firstChild.style.borderLeft = `6px solid ${color(state)}`;
-      return tr;
-    }));
+    const parts = { bar: $("timeline-bar"), axisEl: $("timeline-axis"), detail: $("timeline-detail"),
+      rows: $("timeline-rows"), caption: $("timeline-caption") };
+    const { total, states } = renderTimeline(parts, data);
     $("plot-info").textContent = states.length
       ? `State machine, ${formatDuration(total)} recorded in this range (time without any recording is left out)`
       : "No recorded state changes in this range.";

@@ -3,6 +3,8 @@ zooming (by mouse or finger) fetches finer buckets, From/To only for a custom ra
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import expect
 
@@ -132,3 +134,36 @@ def test_zooming_fetches_finer_buckets(sized_page, seeded):
     expect(page.locator("#plot-info")).to_contain_text("buckets of 60 s")
     expect(page.locator("#zoom-out")).to_be_hidden()
     assert errors == []
+
+
+ROBOT_STATES = ["offline", "startup", "suspension", "demo", "manual", "behaviour", "idle", "navigation",
+                "navigation_planning", "navigation_go_to_emotional", "navigation_go_to_schedular",
+                "wandering_emotional", "show_off_mea", "conveying_emotional_state", "music_horror", "astrolanguage",
+                "waking_up", "sleepy", "sleeping", "exhausted", "a_state_added_later", "and_another"]
+
+
+def test_the_timeline_has_a_colour_per_state_a_time_axis_and_says_when_each_stretch_was(sized_page, seeded):
+    page = sized_page
+    login(page, seeded, "vera", next_path="/history/")
+    colours = page.evaluate("""async (states) => {
+        const { stateColors } = await import('/static/js/timeline.js');
+        return stateColors(states);
+    }""", ROBOT_STATES)
+    assert len(set(colours.values())) == len(ROBOT_STATES), colours  # suspension and sleeping, demo and sleepy…
+
+    page.click("[data-preset=timeline]")
+    expect(page.locator("#timeline-rows tr").first).to_be_visible()
+    # A 24-hour time axis in the site's zone, the date where the day changes (it spans one here).
+    ticks = page.locator("#timeline-axis .timeline-tick").all_inner_texts()
+    assert len(ticks) >= 2 and all(re.fullmatch(r"(\d{4}-\d{2}-\d{2} )?\d{2}:\d{2}", t) for t in ticks), ticks
+    assert re.match(r"\d{4}-", ticks[0]) and sum(1 for t in ticks if "-" in t) <= 2, ticks
+    expect(page.locator("#timeline-caption")).to_contain_text(re.compile(r"Times in \w+"))
+    # Each stretch says its state, its times and how long it was; a tap shows the same.
+    stretch = page.locator('#timeline-bar .timeline-seg[data-state="suspension"]')
+    when = re.compile(r"^suspension: \d{4}-\d{2}-\d{2} \d{2}:\d{2}:\d{2} – \d{2}:\d{2}:\d{2} \w+ \(\d+\.\d min\)$")
+    expect(stretch).to_have_attribute("title", when)
+    stretch.dispatch_event("click")
+    expect(page.locator("#timeline-detail")).to_have_text(when)
+    # How often each state was entered.
+    expect(page.locator("#timeline-rows tr", has_text="startup").locator("td").nth(3)).to_have_text("1")
+    assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0
