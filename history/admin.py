@@ -14,6 +14,7 @@ from django.shortcuts import redirect
 from django.urls import path
 from django.utils.html import format_html
 
+from history.durations import DurationInSeconds
 from history.incidents import incident_release
 from history.models import Incident, Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import policies_add_discovered
@@ -74,6 +75,12 @@ class TopicPolicyAdmin(admin.ModelAdmin):
     @admin.display(description="Topic", ordering="topic")
     def topic_and_type(self, policy: TopicPolicy) -> str:
         return format_html('{}<br><small class="policy-type">{}</small>', policy.topic, policy.msg_type)
+
+    def formfield_for_dbfield(self, db_field: Any, request: HttpRequest, **kwargs: Any) -> Any:
+        if db_field.name == "retention_s":  # "30 d", not 2592000.0 (the list's inline edits too)
+            return DurationInSeconds(required=False, label="Retention",
+                                     help_text="Delete samples older than this (30 d, 12 h, 90 min); empty = keep.")
+        return super().formfield_for_dbfield(db_field, request, **kwargs)
 
     def save_model(self, request: HttpRequest, obj: Any, form: Any, change: bool) -> None:
         # (the list's inline edits come here too, one policy at a time)

@@ -4,6 +4,7 @@ from django.urls import reverse
 from cyborg_site.rendering import render_safe
 from cyborg_site.roles import is_admin, is_operator
 from history.models import Incident
+from history.plotunits import units_of
 from history.replay import replay_start
 from history.replay_api import incident_out
 from history.selectors import recorded_topics
@@ -15,7 +16,8 @@ def index(request: HttpRequest) -> HttpResponse:
     emotion = ri.topic("emotional_state").name
     config = {
         "topics": [
-            {"topic": t["topic"], "msg_type": t["msg_type"], "fields": t["fields"], "text": t["text"]}
+            {"topic": t["topic"], "msg_type": t["msg_type"], "fields": t["fields"], "text": t["text"],
+             "units": units_of(t["topic"], t["fields"])}
             for t in recorded_topics()
         ],
         "presets": {

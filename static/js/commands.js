@@ -32,7 +32,7 @@ export async function sendCommand(command, body, { control = null, result = null
 // The card's result line: what the robot was told, when, and whether it worked.
 function showResult(el, text, ok) {
   if (!el) return;
-  el.textContent = `${ok ? "✓" : "✗"} ${text} · ${formatTime(Date.now() / 1000, { date: false })}`;
+  el.textContent = `${ok ? "✓" : "✗"} ${text} · ${formatTime(Date.now() / 1000, { date: false, label: true })}`;
   el.classList.toggle("result-ok", ok);
   el.classList.toggle("result-bad", !ok);
 }

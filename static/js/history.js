@@ -4,6 +4,7 @@
 import { getJSON, notify } from "./api.js";
 import { readConfig } from "./config.js";
 import { formatDuration, formatTime, parseSiteTime, toSiteInput, zone, zoneLabel } from "./time.js";
+import { timeTicks, valueLabel } from "./plotaxes.js";
 import { renderTimeline } from "./timeline.js";
 
 const config = readConfig("history-config");
@@ -78,12 +79,12 @@ function align(results, scale) {
 }
 
 function draw(fields, data, unit) {
-  const series = [{}];
+  const series = [{ value: (u, v) => (v == null ? "—" : formatTime(v, { label: true })) }];
   const bands = [];
   fields.forEach((name, i) => {
     const color = COLORS[i % COLORS.length];
     const base = series.length;
-    series.push({ label: name, stroke: color, width: 1.5, spanGaps: false, value: (u, v) => v == null ? "—" : `${v.toFixed(3)}${unit}` });
+    series.push({ label: name, stroke: color, width: 1.5, spanGaps: false, value: (u, v) => v == null ? "—" : `${v.toFixed(3)} ${unit}`.trim() });
     series.push({ label: `${name} min`, stroke: "transparent", show: true, points: { show: false } });
     series.push({ label: `${name} max`, stroke: "transparent", show: true, points: { show: false } });
     bands.push({ series: [base + 2, base + 1], fill: color + "22" });
@@ -92,7 +93,8 @@ function draw(fields, data, unit) {
   const el = $("chart");
   chart = new uPlot({
     width: el.clientWidth || 800, height: 360, series, bands,
-    scales: { x: { time: true } }, axes: [{ label: `time (${zoneLabel()})` }, { label: unit || undefined }],
+    scales: { x: { time: true } },
+    axes: [{ label: `time (${zone}, ${zoneLabel()})`, values: timeTicks, space: 70 }, { label: valueLabel(fields, unit) }],
     tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), zone),
     legend: { live: true },
     // A drag selects a stretch; we fetch finer buckets for it rather than stretch the coarse ones.
@@ -161,7 +163,11 @@ async function zoomTo(start, end) {
 }
 
 async function plot(topic, fields, opts = {}) {
-  const { scale = 1, unit = "" } = opts;
+  // A preset says its unit; otherwise the server knows the field's (battery in %, not 0.72).
+  const known = config.topics.find((t) => t.topic === topic)?.units?.[fields[0]];
+  const scale = opts.scale ?? known?.scale ?? 1;
+  const unit = opts.unit || known?.unit || "";
+  opts = { ...opts, scale, unit };
   showView("chart");
   if (chart) { chart.destroy(); chart = null; }
   const r = range();

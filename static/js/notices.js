@@ -32,7 +32,7 @@ export function noticeElement({ message, level = "info", at = Date.now() / 1000,
 export function updateNotice(el, { message, at, repeats = 0 }) {
   const when = el.querySelector(".notice-time");
   when.dateTime = new Date(at * 1000).toISOString();
-  when.textContent = formatTime(at, { date: Date.now() / 1000 - at > 43200 });
+  when.textContent = formatTime(at, { date: Date.now() / 1000 - at > 43200, label: true });
   el.querySelector(".notice-text").textContent = message;
   el.querySelector(".notice-count").textContent = repeats > 1 ? `×${repeats}` : "";
 }

@@ -6,7 +6,8 @@
 import { attempt, getJSON, notify, request } from "./api.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
-import { formatTime, zone } from "./time.js";
+import { timeTicks, valueLabel } from "./plotaxes.js";
+import { formatTime, zone, zoneLabel } from "./time.js";
 
 const config = readConfig("topics-config");
 const $ = (id) => document.getElementById(id);
@@ -130,7 +131,7 @@ function scheduleRender() {
 
 function renderMessage() {
   if (!latest || !current) return;
-  const when = formatTime(latest.t);
+  const when = formatTime(latest.t, { label: true });
   $("topic-meta").textContent = `${current.type || "type unknown"} · received ${when}${hasCut(latest.msg) ? " · large arrays and texts summarised" : ""}`;
   const scroll = $("topic-message").scrollTop;
   $("topic-message").replaceChildren(tree(latest.msg, [], "message"));
@@ -246,7 +247,9 @@ function buildPlot() {
     width: el.clientWidth || 600, height: 220,
     scales: { x: { time: true } },
     tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), zone),
-    series: [{}, ...fields.map((f, i) => ({ label: f.join("."), stroke: COLOURS[i % COLOURS.length], width: 1.5, spanGaps: true }))],
+    axes: [{ label: `time (${zone}, ${zoneLabel()})`, values: timeTicks, space: 70 },
+      { label: valueLabel(fields.map((f) => f.join(".")), "") }],
+    series: [{ value: (u, v) => (v == null ? "—" : formatTime(v, { label: true })) }, ...fields.map((f, i) => ({ label: f.join("."), stroke: COLOURS[i % COLOURS.length], width: 1.5, spanGaps: true }))],
     legend: { live: true },
   }, [xs, ...ys], el);
 }

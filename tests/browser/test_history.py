@@ -30,6 +30,10 @@ rows += [("/test/speech", "std_msgs/String", now - 300, '{"data": "Hello there"}
 rows += [("/cyborg_controller/state_change", "cyborg_controller/SystemState", began + at,
           json.dumps({"event": e, "from_system_state": a, "to_system_state": b}))
          for at, e, a, b in ((0, "", "", "startup"), (15, "succeeded", "startup", "suspension"))]
+TopicPolicy.objects.get_or_create(topic="/RosAria/battery_state_of_charge",
+                                  defaults={"msg_type": "std_msgs/Float32", "mode": "off"})
+rows += [("/RosAria/battery_state_of_charge", "std_msgs/Float32", now - 500 + i * 10,
+          json.dumps({"data": 0.72 + i / 350})) for i in range(50)]
 write_rows(rows)
 """
 
@@ -167,3 +171,29 @@ def test_the_timeline_has_a_colour_per_state_a_time_axis_and_says_when_each_stre
     # How often each state was entered.
     expect(page.locator("#timeline-rows tr", has_text="startup").locator("td").nth(3)).to_have_text("1")
     assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0
+
+
+def test_plots_read_24_hour_times_in_the_site_zone_and_name_their_units(sized_page, seeded):
+    page = sized_page
+    login(page, seeded, "vera", next_path="/history/")
+    # The time axis: 24-hour, the date on the first tick and where the day changes.
+    ticks = page.evaluate("""async () => {
+        const { timeTicks } = await import('/static/js/plotaxes.js');
+        const t0 = Date.UTC(2026, 10, 24, 12, 0, 0) / 1000;  // 13:00 in Oslo, 14:24 is "2:24pm" in the US
+        return timeTicks(null, [t0, t0 + 3600, t0 + 5040, t0 + 12 * 3600], 0, 0, 3600);
+    }""")
+    assert ticks == ["2026-11-24 13:00", "14:00", "14:24", "2026-11-25 01:00"], ticks
+
+    # Battery picked by hand (no preset) is plotted in % with its unit, not as 0.72 "data".
+    page.select_option("#topic", "/RosAria/battery_state_of_charge")
+    page.select_option("#field", "data")
+    page.select_option("#range", "hour")
+    page.click("#plot-form button[type=submit]")
+    over = page.locator("#chart .u-over")
+    expect(over).to_be_visible()
+    box = over.bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.95, box["y"] + box["height"] / 2)
+    values = page.locator("#chart .u-legend .u-series .u-value")
+    expect(values.nth(0)).to_have_text(re.compile(r"^\d{4}-\d{2}-\d{2} \d{2}:\d{2}:\d{2} \w+$"))
+    expect(values.nth(1)).to_have_text(re.compile(r"^\d+\.\d{3} %$"))
+    assert 70 <= float(values.nth(1).inner_text().split()[0]) <= 90
