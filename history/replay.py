@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from django.conf import settings
+from django.db import connection
 from django.db.models import Max, Min
 from django.urls import reverse
 
@@ -45,10 +46,19 @@ def topic_names(keys: Iterable[str]) -> dict[str, str]:
     return {ri.topic(key).name: key for key in keys}
 
 
-def _latest(topic: str, t: float) -> dict[str, Any] | None:
-    row = (Sample.objects.filter(topic=topic, received_at__lte=utc(t)).order_by("-received_at")
-           .values_list("received_at", "data").first())
-    return {"t": row[0].timestamp(), "msg": row[1]} if row else None
+def latest_each(topics: Iterable[str], t: float) -> dict[str, dict[str, Any]]:
+    """The newest sample of each topic at or before ``t``: one statement of one indexed
+    ``ORDER BY ... DESC LIMIT 1`` per topic (a query per topic costs the ORM's overhead each)."""
+    names = list(topics)
+    if not names:
+        return {}
+    table = Sample._meta.db_table
+    one = (f"SELECT * FROM (SELECT id, topic, received_at, data FROM {table} WHERE topic = %s AND received_at <= %s"
+           " ORDER BY received_at DESC LIMIT 1) AS s{}")
+    sql = " UNION ALL ".join(one.format(i) for i in range(len(names)))
+    at = connection.ops.adapt_datetimefield_value(utc(t))
+    rows = Sample.objects.raw(sql, [value for name in names for value in (name, at)])
+    return {row.topic: {"t": row.received_at.timestamp(), "msg": row.data} for row in rows}
 
 
 def pose_point(t: float, msg: dict[str, Any]) -> list[float] | None:
@@ -141,11 +151,12 @@ def map_png(sample_id: int) -> Path:
 
 def state_at(t: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any]:
     """The robot as it was at ``t``; topics named in ``hidden`` (sensitive for this person) left out."""
-    topics = {key: _latest(name, t) for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    names = {name: key for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    topics = {names[name]: value for name, value in latest_each(names, t).items()}
     pose = topics.get("robot_pose")
     return {
         "t": t,
-        "topics": {key: value for key, value in topics.items() if value is not None},
+        "topics": topics,
         "pose": pose_point(pose["t"], pose["msg"]) if pose else None,
         "trail": trail(t - TRAIL_S, t) if "robot_pose" in topics else [],
         "goal": goal_of(topics.get("plan"), topics.get("move_base_status"), t),
@@ -172,12 +183,13 @@ def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) ->
         else:
             changes.append([round(at.timestamp(), 3), key, data])
     frames = CameraFrame.objects.filter(t__gt=start, t__lte=end).order_by("t").values_list("t", "id")
+    prefix = frame_url(0).removesuffix("0.jpg")
     maps = Sample.objects.filter(topic=ri.topic("map").name, received_at__gt=utc(start), received_at__lte=utc(end))
     return {
         "start": start, "end": end, "poses": poses, "changes": changes,
         "log": log_lines(start, end) if ri.topic("rosout").name not in hidden else [],
         "commands": commands(start, end),
-        "frames": [[round(ft, 3), fid, frame_url(fid)] for ft, fid in frames],
+        "frames": [[round(ft, 3), fid, f"{prefix}{fid}.jpg"] for ft, fid in frames],
         "maps": [map_at(at.timestamp()) for at in maps.values_list("received_at", flat=True)],
     }
 

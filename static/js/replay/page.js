@@ -4,7 +4,7 @@ import { request } from "../api.js";
 import { drawMap } from "./map.js";
 import { Timeline } from "./timeline.js";
 
-const WINDOW_S = 120;
+const WINDOW_S = 60;
 const config = JSON.parse(document.getElementById("replay-config").textContent);
 const $ = (id) => document.getElementById(id);
 const scrubber = $("scrubber"), playButton = $("play"), speedSelect = $("speed");
