@@ -6,6 +6,7 @@ import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
 import { attachGestures } from "./map/gestures.js";
 import { OVERLAYS, Overlays } from "./map/overlays.js";
+import { distanceLeft, formatLeft, Progress } from "./map/progress.js";
 import { formatMetres, quaternionToYaw, scaleBar, View } from "./map/view.js";
 
 const config = readConfig("map-config");
@@ -149,6 +150,7 @@ const onUpdate = {
     root.dataset.robotY = state.robot.y.toFixed(3);
     $("robot-pose").textContent =
       `x ${state.robot.x.toFixed(2)} m · y ${state.robot.y.toFixed(2)} m · ${(state.robot.yaw * 180 / Math.PI).toFixed(0)}°`;
+    renderProgress();
   },
   plan(m) { state.plan = (m.poses || []).map((p) => [p.pose.position.x, p.pose.position.y]); },
   bumper_state(m) {
@@ -177,7 +179,25 @@ function renderGoal() {
     ? `${goal.location ? goal.location + " · " : ""}x ${goal.x.toFixed(2)} · y ${goal.y.toFixed(2)} · ${(goal.yaw * 180 / Math.PI).toFixed(0)}° (by ${goal.by || "?"})`
     : "—";
   $("goal-text").textContent = goal?.status_text || "";
+  renderProgress(goal);
   scheduleDraw();
+}
+
+const progress = new Progress();
+function renderProgress(goal = currentGoal()) {
+  const underWay = goal && !goal.finished;
+  const left = progress.update(underWay ? goal.id : null,
+    underWay ? distanceLeft(state.robot, goal, state.plan) : null, Date.now() / 1000);
+  $("goal-left").textContent = formatLeft(left);
+  root.dataset.goalMetres = left.metres == null ? "" : left.metres.toFixed(2);
+}
+
+// What the cancel did, in the operator's words (the audit keeps the goal's id).
+function cancelText(result) {
+  const goal = result.goal;
+  if (!goal) return "Navigation stopped: no goal of ours was under way.";
+  const where = goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`;
+  return goal.finished ? `The goal to ${where} had already ended (${goal.status}).` : `Cancelling the goal to ${where}.`;
 }
 
 // --- commands --------------------------------------------------------------------------
@@ -236,7 +256,7 @@ $("zoom-in").onclick = () => { const r = root.getBoundingClientRect(); view.zoom
 $("zoom-out").onclick = () => { const r = root.getBoundingClientRect(); view.zoomAt(r.width / 2, r.height / 2, 1 / 1.4); applyView(); };
 $("zoom-fit").onclick = () => view.meta && fit();
 $("goal-cancel").onclick = async () => {
-  try { notify((await postJSON(config.urls.cancel)).detail, "info", { timeout: 3000 }); } catch (err) { notify(err.message, "error"); }
+  try { notify(cancelText(await postJSON(config.urls.cancel)), "info", { timeout: 3000 }); } catch (err) { notify(err.message, "error"); }
 };
 
 // --- named locations -------------------------------------------------------------------

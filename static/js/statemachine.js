@@ -8,7 +8,7 @@
 import { sendCommand } from "./commands.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
-import { formatAge } from "./time.js";
+import { formatElapsed } from "./time.js";
 
 const config = readConfig("smach-config");
 const box = document.getElementById("smach-graph");
@@ -206,7 +206,7 @@ setTimeout(() => {
 function tickAge() {
   const el = document.querySelector('[data-age="smach_active"]');
   const frame = latest.smach_active ?? latest.state_change;
-  el.textContent = frame ? `in this state for ${formatAge(Date.now() / 1000 - frame.t)}` : "";
+  el.textContent = frame ? `in this state for ${formatElapsed(Date.now() / 1000 - frame.t)}` : "";
 }
 setInterval(tickAge, 1000);
 

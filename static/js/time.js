@@ -61,6 +61,14 @@ export function formatAge(seconds) {
   return `${Math.round(seconds / 3600)} h ago`;
 }
 
+// How long something has lasted, to the whole second: "8 s", "12 min", "3 h".
+export function formatElapsed(seconds) {
+  const s = Math.max(0, seconds || 0);
+  if (s < 90) return `${Math.round(s)} s`;
+  if (s < 5400) return `${Math.round(s / 60)} min`;
+  return `${Math.round(s / 3600)} h`;
+}
+
 export function formatDuration(s) {
   if (s < 90) return `${s.toFixed(1)} s`;
   if (s < 5400) return `${(s / 60).toFixed(1)} min`;

@@ -111,3 +111,24 @@ def test_a_location_saved_on_one_page_appears_on_every_other_at_once(browser, pa
         expect(watcher.locator('#location-list li[data-location="browser-porch"]')).to_have_count(0)
     finally:
         watcher_context.close()
+
+
+def test_an_active_goal_shows_distance_and_time_left_and_its_cancel_says_where_not_its_id(page, stack):
+    open_map(page, stack, "otto")
+    start = robot_xy(page)
+    goal = max([(3.5, -1.0), (-3.5, -1.0)], key=lambda g: math.dist(g, start))
+    token = next(c["value"] for c in page.context.cookies() if c["name"] == "csrftoken")
+    sent = page.request.post(f"{stack.url}/api/navigation/goal/", data={"x": goal[0], "y": goal[1], "yaw": 0},
+                             headers={"X-CSRFToken": token})
+    assert sent.ok, sent.text()
+    left = page.locator("#goal-left")
+    expect(left).to_have_text(re.compile(r"^\d+(\.\d)? m to go · about \d+ (s|min)$"), timeout=15_000)
+    metres = float(left.inner_text().split()[0])
+    assert metres <= math.dist(start, goal) + 0.5, (metres, start, goal)
+
+    page.click("#goal-cancel")
+    toast = page.locator("#notices .notice").last
+    expect(toast).to_contain_text(f"Cancelling the goal to ({goal[0]:.2f}, {goal[1]:.2f})")
+    assert "cyborg_commander-" not in toast.inner_text()
+    expect(page.locator("#goal-status")).to_have_text(re.compile("cancelled|aborted|succeeded"), timeout=15_000)
+    expect(left).to_have_text("—")

@@ -100,6 +100,8 @@ def test_a_viewer_sees_the_graph_but_cannot_send_events(page, stack):
     expect(page.locator("#smach-graph g.edge.available").first).to_be_visible()
     expect(page.locator("#smach-graph g.edge.clickable")).to_have_count(0)
     expect(page.locator("#smach-events button").first).to_be_disabled()
+    # How long it has been in this state: a duration, not "for 2 s ago".
+    expect(page.locator('[data-age="smach_active"]')).to_have_text(re.compile(r"^in this state for \d+ (s|min|h)$"))
 
 
 def test_a_warn_diagnostic_shows_on_the_dashboard_alert_strip_until_it_recovers(page, stack):
