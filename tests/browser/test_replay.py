@@ -156,3 +156,14 @@ def test_an_estop_keeps_the_seconds_before_it_and_exports_as_mcap(page, replay_s
     for topic in ("/camera", "/pose"):
         assert times[topic][0] - incident["start"] < 1.0 and incident["end"] - times[topic][-1] < 1.0, topic
         assert all(incident["start"] <= t <= incident["end"] for t in times[topic])
+
+
+def test_an_operator_marks_this_moment(page, replay_stack):
+    stack = replay_stack
+    login(page, stack, "otto", next_path="/history/incidents/")
+    page.fill("#mark-note", "a child ran in front")
+    page.click("#mark")
+    row = page.locator("tr[data-kind='manual']").first
+    expect(row).to_contain_text("a child ran in front")
+    expect(row).to_contain_text("otto")
+    expect(row.get_by_role("link", name="MCAP")).to_be_visible()
