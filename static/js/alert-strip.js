@@ -96,7 +96,11 @@ export function initAlertStrip(strip, battery) {
   if (battery) {
     live.watch(["battery_soc"], (frame) => {
       const pct = Math.round(Number(frame.msg.data) * 100);
-      battery.textContent = `Battery ${pct} %`;
+      const word = document.createElement("span");
+      word.className = "battery-word";
+      word.textContent = "Battery ";
+      battery.replaceChildren(word, `${pct} %`);
+      battery.setAttribute("aria-label", `Battery ${pct} %`);
       battery.dataset.percent = String(pct);
       battery.title = `Battery ${pct} % at ${formatTime(frame.t, { date: false })} ${zoneLabel()}`;
     });
