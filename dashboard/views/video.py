@@ -51,10 +51,14 @@ def _params(request: HttpRequest, **fixed: str) -> dict[str, str | int]:
     return params
 
 
-def _unavailable(reason: str, status: int = 503, text: str = "Camera unavailable") -> HttpResponse:
+def _unavailable(reason: str, status: int = 503, text: str = "Camera unavailable", *,
+                 image: bool = True) -> HttpResponse:
+    """The placeholder picture; none (``image=False``) for a page that says it itself, so the
+    picture's text and the page's never lie one over the other."""
     log.info("camera unavailable: %s", reason)
-    response = HttpResponse(PLACEHOLDER_SVG.replace("Camera unavailable", escape(text)), status=status,
-                            content_type="image/svg+xml")
+    response = (HttpResponse(PLACEHOLDER_SVG.replace("Camera unavailable", escape(text)), status=status,
+                             content_type="image/svg+xml") if image
+                else HttpResponse(text, status=status, content_type="text/plain; charset=utf-8"))
     response["Retry-After"] = "3"
     response["Cache-Control"] = "no-store"
     return response
@@ -73,15 +77,16 @@ async def _frames(relay: VideoRelay, viewer: Viewer, person: dict[str, Any]) -> 
 
 async def video_stream(request: HttpRequest) -> HttpResponseBase:
     """MJPEG (multipart/x-mixed-replace) from the robot's camera; 503 + placeholder when it is down,
-    429 past a person's or the server's number of streams."""
+    429 past a person's or the server's number of streams (with ``fallback=none``, no placeholder)."""
     relay = get_relay()
     user = await request.auser()
+    image = request.GET.get("fallback") != "none"  # the Drive page shows its own placeholder
     try:
         viewer = await relay.join(settings.VIDEO_URL, _params(request, type="mjpeg"), person=user.pk)
     except TooManyStreams as exc:
-        return _unavailable(str(exc), 429, "Too many camera streams")
+        return _unavailable(str(exc), 429, "Too many camera streams", image=image)
     except UpstreamError as exc:
-        return _unavailable(str(exc))
+        return _unavailable(str(exc), image=image)
     frames = _frames(relay, viewer, {"user": user, "session": request.session})
     # A client gone before the body started never runs the generator's finally.
     weakref.finalize(frames, relay.leave, viewer)

@@ -68,7 +68,8 @@ let retryTimer = null;
 function startCamera() {
   clearInterval(retryTimer);
   frames.streamAt = Date.now();
-  img.src = `${config.stream_url}?t=${Date.now()}`;
+  // No placeholder picture from the server: the page's own says it (never twice, one over the other).
+  img.src = `${config.stream_url}?fallback=none&t=${Date.now()}`;
 }
 
 function pictureHash() {

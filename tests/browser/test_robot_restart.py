@@ -45,6 +45,8 @@ def test_a_robot_restart_greys_the_camera_disables_driving_and_leaves_no_stale_s
                 expect(drive.locator("#camera")).to_have_attribute("data-state", "stale", timeout=10_000)
                 expect(drive.locator("#camera-placeholder")).to_be_visible()
                 expect(drive.locator("#camera-placeholder")).to_contain_text("Camera unavailable")
+                # Said once: no server placeholder picture under the page's own words.
+                expect(drive.locator("#camera-img")).to_be_hidden(timeout=10_000)
                 expect(drive.locator("#camera-age")).to_contain_text(re.compile("last frame|no frame"))
                 # Greyed out only once the last frame is 2 s old.
                 said = drive.locator("#camera-age").inner_text()
