@@ -7,6 +7,7 @@ from typing import Any
 
 from django.http import FileResponse, Http404, HttpResponse
 from django.urls import reverse
+from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import exceptions, status
 from rest_framework.decorators import api_view
@@ -22,6 +23,7 @@ from history.mcapexport import incident_mcap
 from history.models import CameraFrame, Incident
 from robot import interface as ri
 
+OBJECT = OpenApiTypes.OBJECT
 T_PARAM = OpenApiParameter("t", float, description="The moment, in epoch seconds.")
 
 
@@ -37,13 +39,15 @@ def _time(request: Request, name: str) -> float:
     return value
 
 
-@extend_schema(parameters=[T_PARAM], summary="The robot as it was at a moment: state, map, pose, log, commands, frame")
+@extend_schema(parameters=[T_PARAM], responses={200: OBJECT},
+               summary="The robot as it was at a moment: state, map, pose, log, commands, frame")
 @api_view(["GET"])
 def state_view(request: Request) -> Response:
     return Response(replay.state_at(_time(request, "t"), hidden=_hidden(request)))
 
 
 @extend_schema(parameters=[OpenApiParameter("start", float), OpenApiParameter("end", float)],
+               responses={200: OBJECT},
                summary="Every change in (start, end] (at most 5 minutes), for a replay to play through")
 @api_view(["GET"])
 def window_view(request: Request) -> Response:
@@ -53,7 +57,7 @@ def window_view(request: Request) -> Response:
     return Response(replay.window(start, end, hidden=_hidden(request)))
 
 
-@extend_schema(summary="The first and last recorded moment")
+@extend_schema(responses={200: OBJECT}, summary="The first and last recorded moment")
 @api_view(["GET"])
 def span_view(request: Request) -> Response:
     return Response(replay.span())
@@ -96,7 +100,8 @@ def incident_out(incident: Incident) -> dict[str, Any]:
     }
 
 
-@extend_schema(summary="Incidents, newest first (GET); mark this moment (POST, operators)")
+@extend_schema(request=OBJECT, responses={200: OBJECT, 201: OBJECT},
+               summary="Incidents, newest first (GET); mark this moment (POST, operators; body {note})")
 @api_view(["GET", "POST"])
 def incidents_view(request: Request) -> Response:
     if request.method == "POST":
@@ -109,7 +114,7 @@ def incidents_view(request: Request) -> Response:
     return Response({"incidents": [incident_out(i) for i in Incident.objects.all()[:200]]})
 
 
-@extend_schema(summary="Let retention have an incident (admins)")
+@extend_schema(request=None, responses={200: OBJECT}, summary="Let retention have an incident (admins)")
 @api_view(["POST"])
 def release_view(request: Request, incident_id: int) -> Response:
     if not is_admin(request.user):
