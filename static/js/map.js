@@ -5,7 +5,7 @@ import { readConfig } from "./config.js";
 import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
 import { attachGestures } from "./map/gestures.js";
-import { OVERLAYS, Overlays } from "./map/overlays.js";
+import { OVERLAYS, Overlays, swatchFill } from "./map/overlays.js";
 import { distanceLeft, formatLeft, Progress } from "./map/progress.js";
 import { formatMetres, quaternionToYaw, scaleBar, View } from "./map/view.js";
 
@@ -122,6 +122,7 @@ function renderOverlayToggles() {
     box.onchange = () => overlays.toggle(o.name, box.checked);
     const swatch = document.createElement("span");
     swatch.className = `swatch ov-${o.name}`;
+    swatch.style.background = swatchFill(o.name);
     label.append(box, swatch, ` ${o.label}`);
     const note = document.createElement("span");
     note.className = "muted small overlay-note";

@@ -12,7 +12,17 @@ export const OVERLAYS = [
   { name: "scan", label: "Laser scan" },
   { name: "sonar", label: "Sonar" },
 ];
-const COLORS = { sonar: "#1f8f86", scan: "#e0203a", particles: "#7a3fc4", footprint: "#0b7d4f", local_plan: "#13a34a" };
+// The laser in a hue the costmaps never use (they run blue → red, cyan, magenta), ringed dark so it
+// stands out on free, occupied and costly cells alike.
+const COLORS = { sonar: "#1f8f86", scan: "#ffd400", particles: "#7a3fc4", footprint: "#0b7d4f", local_plan: "#13a34a" };
+const DOT_EDGE = "#1c2433";
+// robot/overlays/costmap.py's palette: cost from blue to red, inscribed cyan, lethal magenta.
+const COSTMAP_SWATCH = "linear-gradient(90deg, rgb(40 90 230), rgb(255 0 0) 55%, rgb(0 200 230) 56% 77%, rgb(170 0 170) 78%)";
+
+// The legend's swatch: the very colour the overlay is drawn in.
+export function swatchFill(name) {
+  return OVERLAYS.find((o) => o.name === name)?.costmap ? COSTMAP_SWATCH : COLORS[name];
+}
 
 // One costmap layer: tiles loaded per revision; a tile keeps the placement it was fetched for,
 // so a rolling costmap never draws old cells at the new origin.
@@ -140,12 +150,18 @@ export class Overlays {
 }
 
 function drawPoints(ctx, view, flat, color) {
-  const size = Math.max(2, Math.min(5, view.metres(0.04)));
+  const r = Math.max(2, Math.min(3.5, view.metres(0.03)));
   ctx.fillStyle = color;
+  ctx.strokeStyle = DOT_EDGE;
+  ctx.lineWidth = 1;
+  ctx.beginPath();
   for (let i = 0; i < flat.length; i += 2) {
     const [sx, sy] = view.toScreen(flat[i], flat[i + 1]);
-    ctx.fillRect(sx - size / 2, sy - size / 2, size, size);
+    ctx.moveTo(sx + r, sy);
+    ctx.arc(sx, sy, r, 0, 2 * Math.PI);
   }
+  ctx.fill();
+  ctx.stroke();
 }
 
 // Each echo as a dot on a faint line from the sensor: a sonar ring has few, wide beams.
