@@ -26,6 +26,7 @@ from robot.api.tokens import CachedTokenAuthentication
 from robot.live import redis_clients
 from robot.live.state import get_store, link_status
 from robot.supervisor import failing
+from robot.uplink.status import describe as describe_uplink
 
 
 @dataclass(frozen=True)
@@ -101,6 +102,7 @@ def health_report() -> dict[str, Any]:
                   video_url=settings.VIDEO_URL,
                   failing_tasks=[*status.get("failing_tasks", []), *failing()], link_holder=status.get("holder"),
                   failed_subscriptions=status.get("failed_subscriptions") or {},
+                  uplink=status.get("uplink"), reached=describe_uplink(status.get("uplink")),
                   history_lost_in_handovers=_handover_losses() if "redis" not in down else {})
     return report
 

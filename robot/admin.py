@@ -70,3 +70,5 @@ class LocationAdmin(admin.ModelAdmin):
     @admin.display(description="Heading (°)", ordering="yaw")
     def heading(self, location: Location) -> str:
         return f"{math.degrees(location.yaw):.0f}"
+
+from robot.uplink import admin as _uplink_admin  # noqa: E402,F401  (registers the uplink credentials)

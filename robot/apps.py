@@ -19,10 +19,12 @@ class RobotConfig(AppConfig):
         from robot.link import audio, watching
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
         from robot.overlays import link as overlays
+        from robot.uplink import hosting as uplink
 
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()
         watching.install()  # any topic a page opens: leases, echo, listing and rates
+        uplink.install()  # with UPLINK, the robot's agent connects to the process that hosts the link
 
         broadcast.connect()
 

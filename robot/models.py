@@ -91,3 +91,5 @@ class Location(models.Model):
 
     def __str__(self) -> str:
         return self.name
+
+from robot.uplink.models import UplinkCredential  # noqa: E402,F401  (the uplink credentials belong to this app)

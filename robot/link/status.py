@@ -15,6 +15,7 @@ from robot.live.groups import LATCH_KEY, LinkStatus
 from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S
 from robot.supervisor import failing
+from robot.uplink.hosting import uplink_status
 
 log = logging.getLogger(__name__)
 
@@ -80,7 +81,7 @@ class Upkeep(LinkCore):
     async def publish_status(self) -> None:
         status = self.status()
         try:
-            await aannounce_status(dict(status), store=self.store)
+            await aannounce_status({**status, "uplink": uplink_status()}, store=self.store)
         except Exception:
             log.exception("could not publish link status")
 

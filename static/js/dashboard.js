@@ -156,6 +156,14 @@ document.getElementById("log-clear").addEventListener("click", () => {
 });
 
 // --- connection card and ages ----------------------------------------------------------
+// The robot dials in (UPLINK): from where and since when, or what is missing.
+function uplinkText(u) {
+  const at = (t) => new Date(t * 1000).toLocaleString();
+  if (u.connected) return `robot connected through its uplink from ${u.address} since ${at(u.since)}`;
+  if (u.last_address) return `no uplink from the robot: the last, from ${u.last_address}, ended ${at(u.ended)} (${u.why || "closed"})`;
+  return u.why || "no uplink from the robot yet: is its uplink agent running?";
+}
+
 function renderStatus(s) {
   if (s.server_down) {
     set("link.state", "Server unreachable");
@@ -164,7 +172,7 @@ function renderStatus(s) {
     set("link.state", s.connected ? "Online" : (s.link_running === false ? "Robot link not running" : "Offline"));
     const since = s.since ? formatAge(Date.now() / 1000 - s.since) : "";
     set("link.detail", s.connected ? `connected ${since}` : `retrying${s.attempts ? ` (attempt ${s.attempts})` : ""}`);
-    if (s.url) set("link.url", s.url);
+    if (s.url) set("link.url", s.uplink ? uplinkText(s.uplink) : s.url);
   }
   document.getElementById("card-connection").classList.toggle("bad", !s.connected);
   alertIf("offline", !s.connected, s.server_down ? "Lost the connection to the server; retrying…" : "Robot offline: values below are the last known ones.", "error");

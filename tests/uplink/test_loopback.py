@@ -1,0 +1,108 @@
+"""The link reaches the robot through the agent's uplink, on loopback (the network boundary: test_netns)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from websockets.asyncio.client import connect
+from websockets.exceptions import InvalidStatus
+
+from robot.models import AuditEntry
+from tests.helpers import async_wait_until
+
+pytestmark = [pytest.mark.wiring, pytest.mark.django_db(transaction=True)]
+
+
+async def _link():
+    from robot.link.hosting import start_link
+
+    link, tasks = await start_link(embedded=True, background=False)
+    return link, tasks
+
+
+async def _stop(link, tasks):
+    from robot.link import connection as link_module
+
+    for task in tasks:
+        task.cancel()
+    await link.stop()
+    link_module.current = None
+
+
+async def _actions(*names: str) -> list[AuditEntry]:
+    from asgiref.sync import sync_to_async
+
+    return await sync_to_async(lambda: list(AuditEntry.objects.filter(action__in=names).order_by("id")))()
+
+
+async def test_it_carries_the_link_to_the_robot(sim, endpoint, credential, agent_for):
+    _, text = credential
+    agent = agent_for(text)
+    await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
+    link, tasks = await _link()
+    try:
+        await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
+        assert link.url == endpoint_url(endpoint)
+        before = sim.received_count("/cyborg_audio/text_to_speech")
+        reply = await link.execute({"op": "publish", "topic": "/cyborg_audio/text_to_speech",
+                                    "msg_type": "std_msgs/String", "msg": {"data": "through the uplink"}})
+        assert reply["ok"], reply
+        await async_wait_until(lambda: sim.received_count("/cyborg_audio/text_to_speech") > before, timeout=5,
+                               what="the robot got the publish")
+        status = link.status()
+        assert status["connected"]
+        assert endpoint.status()["connected"] and endpoint.status()["address"] == "127.0.0.1"
+        connects = await _actions("uplink.connect")
+        assert [e.address for e in connects] == ["127.0.0.1"] and connects[0].ok
+    finally:
+        await _stop(link, tasks)
+
+
+def endpoint_url(endpoint) -> str:
+    return f"ws://127.0.0.1:{endpoint.relays.rosbridge_port}"
+
+
+async def test_a_bad_credential_gets_a_closed_door_and_an_audit_row(endpoint, credential):
+    _, text = credential
+    for header in ({}, {"Authorization": "Bearer cyu_nope_nope"}, {"Authorization": "Bearer " + text + "x"}):
+        with pytest.raises(InvalidStatus) as refused:
+            async with connect(f"ws://127.0.0.1:{endpoint.port}/uplink/", additional_headers=header):
+                pass
+        assert refused.value.response.status_code == 403 and not refused.value.response.body
+    assert endpoint.live is None
+    refusals = await _actions("uplink.refuse")
+    assert len(refusals) == 3 and not any(e.ok for e in refusals)
+
+
+async def test_a_flood_of_attempts_is_throttled(endpoint, settings):
+    codes = []
+    for _ in range(settings.UPLINK_FAILURE_LIMIT + 3):
+        with pytest.raises(InvalidStatus) as refused:
+            async with connect(f"ws://127.0.0.1:{endpoint.port}/uplink/",
+                               additional_headers={"Authorization": "Bearer cyu_a_b"}):
+                pass
+        codes.append(refused.value.response.status_code)
+    assert codes == [403] * settings.UPLINK_FAILURE_LIMIT + [429] * 3
+    assert len(await _actions("uplink.refuse")) == settings.UPLINK_FAILURE_LIMIT  # not one per flooded attempt
+
+
+async def test_nothing_listens_for_the_link_while_the_robot_is_away(endpoint):
+    with pytest.raises(OSError):
+        await asyncio.open_connection("127.0.0.1", endpoint.relays.rosbridge_port)
+
+
+async def test_revoking_the_credential_closes_its_live_uplink_at_once(sim, endpoint, credential, agent_for):
+    from asgiref.sync import sync_to_async
+
+    from robot.uplink.credentials import credential_revoke
+
+    made, text = credential
+    agent = agent_for(text)
+    await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
+    await sync_to_async(credential_revoke)(credential=made)
+    await async_wait_until(lambda: endpoint.live is None, timeout=1, what="the revoked uplink closed")
+    gone = await _actions("uplink.disconnect")
+    assert len(gone) == 1 and "revoked" in gone[0].outcome
+    await async_wait_until(lambda: "the server refused the uplink" in agent.log(), timeout=5, what="a refusal")
+    assert endpoint.live is None

@@ -1,0 +1,223 @@
+"""The robot behind a real network boundary: the simulator and the agent in a network namespace of
+their own, which the server cannot reach; the agent dials nginx (TLS, the tests' own CA) and the
+server drives the robot through it. Each test leaves the topology as it found it."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import socket
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import pytest
+from django.conf import settings
+from websockets.asyncio.client import connect
+
+from tests.helpers import wait_until
+from tests.stack import PYTHON, Stack, free_port
+from tests.support_processes import Client, PrivateRedis
+from tests.uplink.netns import Front, RobotSide, TestCA
+from tests.uplink.support import Agent
+
+pytestmark = [pytest.mark.stack, pytest.mark.skipif(os.geteuid() != 0, reason="network namespaces need root")]
+FORWARD = {"type": "input", "linear": 0.3, "angular": 0.0}
+
+
+@dataclass
+class World:
+    side: RobotSide
+    stack: Stack
+    front: Front
+    agent: Agent
+    sim_port: int
+    video_port: int
+
+    def received(self, topic: str = "/cmd_vel") -> list[dict]:
+        url = f"http://127.0.0.1:{self.video_port}/sim/received?topic={topic}"
+        count = json.loads(self.side.fetch(f"{url}&last=0"))["count"]
+        return json.loads(self.side.fetch(f"{url}&last={max(count, 1)}"))["messages"]
+
+    def health(self) -> dict:
+        status, body = Client(self.stack, "ada").get("/healthz")
+        assert status in (200, 503), body
+        return body
+
+    def uplinked(self) -> bool:
+        body = self.health()
+        return bool(body.get("connected") and (body.get("uplink") or {}).get("connected"))
+
+    def wait_online(self, timeout: float = 20) -> None:
+        try:
+            wait_until(self.uplinked, timeout=timeout)
+        except AssertionError:
+            raise AssertionError(f"the robot never came online through its uplink: {self.health()}\n"
+                                 f"{self.agent.log()[-2000:]}") from None
+
+    def credential(self, *, revoke: str = "") -> str:
+        """A new credential's text (or revoke the credential with key id ``revoke``)."""
+        code = ("from robot.uplink.credentials import *\nfrom robot.uplink.models import UplinkCredential\n" + (
+            f"credential_revoke(credential=UplinkCredential.objects.get(key_id={revoke!r}))\n" if revoke else
+            "print(credential_create(robot='cyborg', label='netns')[1])\n"))
+        out = self.stack.manage("shell", "-c", code).strip()
+        return out.splitlines()[-1] if not revoke else ""
+
+
+def _unreachable(host: str, port: int) -> bool:
+    try:
+        socket.create_connection((host, port), 1).close()
+    except OSError:
+        return True
+    return False
+
+
+@pytest.fixture(scope="module")
+def world() -> Iterator[World]:
+    side = RobotSide().up()
+    ca = TestCA(side.host_ip)
+    redis = PrivateRedis().start() if settings.REDIS_URL else None
+    sim_port, video_port = free_port(), free_port()
+    uplink_port, relay_port, relay_video_port = free_port(), free_port(), free_port()
+    stack = Stack(sim=False, redis_url=redis.url if redis else None, env={
+        "UPLINK": "true", "UPLINK_LISTEN": f"127.0.0.1:{uplink_port}",
+        "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(relay_video_port),
+        "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{relay_video_port}",
+        "TRUSTED_PROXIES": "127.0.0.1", "TELEOP_LOCK_TTL_S": "1"})
+    front = agent = None
+    sim = None
+    try:
+        stack.start()
+        sim = side.spawn([PYTHON, "manage.py", "simrobot", "--host", "127.0.0.1", "--port", str(sim_port),
+                          "--video-port", str(video_port), "--startup-s", "0.5"], stack.tmp / "sim.log", stack.env)
+        side.wait_port(sim_port)
+        # The boundary holds: nothing of the robot's is reachable from the server's side.
+        assert _unreachable(side.robot_ip, sim_port) and _unreachable(side.robot_ip, video_port)
+        assert _unreachable("127.0.0.1", sim_port) and _unreachable("127.0.0.1", video_port)
+        front = Front(ip=side.host_ip, port=free_port(), uplink_port=uplink_port, ca=ca).start()
+        world = World(side, stack, front, None, sim_port, video_port)  # type: ignore[arg-type]
+        agent = world.agent = Agent(
+            server_url=f"wss://{side.host_ip}:{front.port}/uplink/", credential=world.credential(),
+            rosbridge_url=f"ws://127.0.0.1:{sim_port}", video_url=f"http://127.0.0.1:{video_port}",
+            prefix=side.prefix(), UPLINK_CA_FILE=str(ca.ca)).start()
+        world.wait_online(timeout=40)
+        assert Client(stack, "otto").post("/api/robot/motors/", {"enabled": True})[0] == 200
+        yield world
+    finally:
+        if agent is not None:
+            agent.__exit__()
+        if front is not None:
+            front.stop()
+        if sim is not None:
+            os.killpg(sim.pid, 15)
+            sim.wait(10)
+        stack.stop()
+        if redis is not None:
+            redis.stop()
+        ca.remove()
+        side.down()
+
+
+def test_the_dashboard_shows_the_robot_through_its_uplink_and_a_command_reaches_it(world: World) -> None:
+    body = world.health()
+    assert body["uplink"]["address"] == world.side.robot_ip  # as nginx saw it, through TRUSTED_PROXIES
+    assert body["reached"].startswith(f"robot connected through its uplink from {world.side.robot_ip} since ")
+    before = len(world.received("/cyborg_audio/text_to_speech"))
+    status, reply = Client(world.stack, "otto").post("/api/robot/speech/", {"text": "hello through the uplink"})
+    assert status == 200, reply
+    wait_until(lambda: len(world.received("/cyborg_audio/text_to_speech")) > before, timeout=5,
+               what="the robot said it")
+    assert world.received("/cyborg_audio/text_to_speech")[-1]["msg"]["data"] == "hello through the uplink"
+
+
+async def _drive(world: World, seconds: float, during=None) -> None:
+    """A driver's page holding a key (input every 50 ms throughout); ``during`` runs once the robot moves."""
+    client = Client(world.stack, "otto")
+    before = len(await asyncio.to_thread(world.received))
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+                       additional_headers={"Cookie": client.cookie}) as ws:
+        end = time.monotonic() + seconds
+
+        async def hold() -> None:
+            while time.monotonic() < end:
+                await ws.send(json.dumps(FORWARD))
+                await asyncio.sleep(0.05)
+
+        holding = asyncio.ensure_future(hold())
+        while not any(_moving(m) for m in (await asyncio.to_thread(world.received))[before:]):
+            assert time.monotonic() < end, "the robot never moved"
+        if during is not None:
+            await asyncio.to_thread(during)
+        await holding
+
+
+def _moving(m: dict) -> bool:
+    return m["msg"]["linear"]["x"] != 0 or m["msg"]["angular"]["z"] != 0
+
+
+def test_driving_reaches_the_robot_and_a_dropped_uplink_stops_it_from_the_agent(world: World) -> None:
+    dropped: list[float] = []
+
+    def drop() -> None:
+        logged = len(world.agent.log())
+        world.front.kill()  # the uplink drops mid-drive
+        dropped.append(time.time())
+        world.agent.wait_log("stopping the robot: the uplink dropped", after=logged)
+
+    asyncio.run(_drive(world, 1.0, during=drop))
+    after = [m for m in world.received() if m["t"] > dropped[0]]
+    assert after and not _moving(after[-1]), "the robot was left moving"
+    world.front.start()
+    world.wait_online()
+    asyncio.run(_drive(world, 0.5))  # driving works again, nobody restarted anything by hand
+
+
+def test_the_estop_stops_the_robot_through_the_uplink_and_its_release_lets_it_drive(world: World) -> None:
+    operator = Client(world.stack, "otto")
+    before = len(world.received())
+    status, body = operator.post("/api/robot/estop/", {})
+    assert status == 200, body
+    wait_until(lambda: any(not _moving(m) for m in world.received()[before:]), timeout=3, what="the stop's zero")
+    assert operator.post("/api/robot/motors/", {"enabled": True})[0] != 200  # latched: motion is refused
+    status, body = operator.post("/api/robot/estop/release/", {"confirm": True})
+    assert status == 200, body
+    assert operator.post("/api/robot/motors/", {"enabled": True})[0] == 200
+    asyncio.run(_drive(world, 0.5))
+
+
+def test_the_agent_and_the_server_restarting_are_survived(world: World) -> None:
+    world.agent.stop(9)
+    wait_until(lambda: not world.uplinked(), timeout=10, what="the server noticing the agent gone")
+    assert "no uplink from the robot" in world.health()["reached"]
+    world.agent.start()
+    world.wait_online()
+    web = world.stack.web if not world.stack.scaled else world.stack.link_proc
+    web.terminate()
+    web.wait(15)
+    if world.stack.scaled:
+        world.stack.start_link()
+    else:
+        world.stack.start_web()
+    world.wait_online(timeout=30)
+    before = len(world.received("/cyborg_audio/text_to_speech"))
+    assert Client(world.stack, "otto").post("/api/robot/speech/", {"text": "back"})[0] == 200
+    wait_until(lambda: len(world.received("/cyborg_audio/text_to_speech")) > before, timeout=5, what="a command")
+
+
+def test_a_revoked_credential_closes_the_live_uplink_within_a_second_and_is_refused(world: World) -> None:
+    key_id = world.agent.env["UPLINK_CREDENTIAL"].split("_")[1]
+    logged = len(world.agent.log())
+    world.credential(revoke=key_id)
+    world.agent.wait_log("uplink lost", after=logged, timeout=5)
+    world.agent.wait_log("the server refused the uplink", after=logged, timeout=10)
+    code = ("from robot.models import AuditEntry\nfrom robot.uplink.models import UplinkCredential\n"
+            f"revoked = UplinkCredential.objects.get(key_id={key_id!r}).revoked\n"
+            "gone = AuditEntry.objects.filter(action='uplink.disconnect', created__gte=revoked).earliest('created')\n"
+            "refused = AuditEntry.objects.filter(action='uplink.refuse', created__gte=revoked).count()\n"
+            "print((gone.created - revoked).total_seconds(), gone.outcome, refused)\n")
+    line = world.stack.manage("shell", "-c", code).strip().splitlines()[-1]
+    seconds, rest = line.split(" ", 1)
+    assert float(seconds) < 1.0, line
+    assert "revoked" in rest and int(rest.rsplit(" ", 1)[1]) >= 1, line
+    assert not world.uplinked()
