@@ -14,8 +14,9 @@ lines and a camera frame every half second (a small JPEG: this figure is about s
 - ``camera_storage_mb_per_hour``: the frames the camera recorder stored from the simulator's camera
   at the default 2 fps, 320x240, quality 60, per hour (the simulator's picture; a real camera's
   JPEGs are larger: see the README).
-- ``incident_capture_lost_msgs``: a marked moment once the stack has run longer than the minute
-  before it; when its 90 s have passed, the odometry messages missing from it (gaps in header.seq,
+- ``incident_capture_lost_msgs``: a marked moment once the stack (with the default recording
+  policies) has run longer than the minute before it; when its 90 s have passed, the odometry
+  messages missing from it (gaps in header.seq,
   which the simulator numbers like roscpp, and from the window's edges at its 10 Hz).
 - ``incident_export_s``: that 90 s incident (every message of the black box's topics, the camera at
   the simulator's full 8 fps) as one MCAP over HTTP.
@@ -175,6 +176,7 @@ def main() -> None:
     env = {"INCIDENT_BEFORE_S": "60", "INCIDENT_AFTER_S": "30", "LOG_LEVEL": "WARNING"}
     with Stack(sim_args=("--startup-s", "0.5"), env=env) as stack:
         stack.wait_robot_online()
+        stack.manage("shell", "-c", "from history.defaults import ensure_default_policies; ensure_default_policies()")
         up = time.time()
         seed_end = up - 3600.0  # the seeded day ends an hour before the live recording begins
         seeding = time.perf_counter()

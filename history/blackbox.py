@@ -5,8 +5,12 @@ box's topics to a ring of the last ``INCIDENT_BEFORE_S`` seconds, checks it for 
 and queues it for storage when it falls in an open incident's window. The loop opens an
 incident for each trigger and for an E-STOP seen in the shared latch, adopts the incidents
 other processes opened (a marked moment), writes the ring's part of each new window and the
-messages since, and hands the camera recorder the same windows. Topics the recorder already
-stores every message of are not written twice.
+messages since, and hands the camera recorder the same windows.
+
+What it writes: every message of the topics an admin records every N seconds (the default
+policies cover all of ``TOPIC_KEYS``), so inside an incident they are at full rate. Topics
+recorded every message are already stored by the recorder; a topic the admin switched off
+stays unrecorded, incident or not.
 
 A restart loses the ring (the minute before an incident still open then), never what was
 queued: a clean stop writes it.
@@ -55,8 +59,9 @@ class BlackBox:
         self._write_log = FailureLog("writing incident messages")
         self.received = self.stored = self.lost = 0
 
-    def _recorded_anyway(self) -> frozenset[str]:
-        return recorder.current.every if recorder.current is not None else frozenset()
+    def _upgraded(self) -> frozenset[str]:
+        """The topics recorded every N seconds: those an incident keeps every message of."""
+        return recorder.current.periodic if recorder.current is not None else frozenset()
 
     # --- on the event-loop thread: never blocks --------------------------------------
 
@@ -76,7 +81,7 @@ class BlackBox:
 
     def _keep(self, entry: list[Any]) -> None:
         entry[4] = True
-        if entry[0] not in self._recorded_anyway():
+        if entry[0] in self._upgraded():
             self._pending.append((entry[0], entry[1], entry[2], entry[3]))
 
     def adopt(self, incident: Incident) -> None:

@@ -14,8 +14,9 @@ from history import blackbox, camerarec
 from history.frames import frame_at, frame_file, prune_frames, write_frames
 from history.incidents import Triggers, incident_open, incident_release
 from history.models import CameraFrame, Incident, Mode, Sample, TopicPolicy
+from history.policies import policy_upsert
 from history.retention import prune_expired
-from history.storage import write_rows
+from history.storage import utc, write_rows
 from robot import interface as ri
 from robot.live.announce import aannounce, server_update
 from robot.live.keys import LATCH_KEY
@@ -23,6 +24,12 @@ from robot.live.latchstate import Latch
 from tests.helpers import async_wait_until
 
 JPEG = b"\xff\xd8\xff\xe0fake-jpeg\xff\xd9"
+
+
+async def _record_hourly(key: str) -> None:
+    """A topic recorded every hour: an incident keeps every message of it."""
+    topic = ri.topic(key)
+    await sync_to_async(policy_upsert)(topic=topic.name, msg_type=topic.type, mode=Mode.PERIODIC, interval_s=3600)
 
 
 @pytest.fixture
@@ -38,6 +45,7 @@ async def black_box(recording, sim, link, settings, camera_dir):
     settings.CAMERA_RECORD_FPS = 2.0
     settings.INCIDENT_BEFORE_S = 3.0
     settings.INCIDENT_AFTER_S = 1.5
+    await _record_hourly("robot_pose")
     tasks = [asyncio.ensure_future(camerarec.run_camera_recorder(link)),
              asyncio.ensure_future(blackbox.run_blackbox(link))]
     await async_wait_until(lambda: camerarec.current is not None and blackbox.current is not None, timeout=5)
@@ -134,8 +142,9 @@ async def test_an_estop_keeps_the_seconds_before_it_at_full_rate_camera_included
     # The simulator's camera sends ~8 frames a second: the 3 s before are there at full rate, not at 2 fps.
     assert len(before) >= 15, before
     assert min(before) - incident.start < 1.0
-    poses = await sync_to_async(
-        lambda: list(Sample.objects.filter(topic=pose).values_list("received_at", flat=True)))()
+    poses = await sync_to_async(lambda: list(Sample.objects.filter(
+        topic=pose, received_at__gte=utc(incident.start), received_at__lte=utc(incident.end))
+        .values_list("received_at", flat=True)))()
     stamps = sorted(at.timestamp() for at in poses)
     assert stamps and stamps[0] - incident.start < 0.5 and incident.end - stamps[-1] < 0.5
     assert len([t for t in stamps if t < pressed]) >= 20  # the simulator's pose at 10 Hz
@@ -147,6 +156,7 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
     settings.INCIDENT_BEFORE_S = 2.0
     settings.INCIDENT_AFTER_S = 3.0
     odom = ri.topic("odom").name
+    await _record_hourly("odom")
     first = asyncio.ensure_future(blackbox.run_blackbox(link))
     await async_wait_until(lambda: blackbox.current is not None and blackbox.current.received > 30, timeout=10,
                            what="the black box hearing the robot")
@@ -163,11 +173,21 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
         second.cancel()
         await asyncio.gather(second, return_exceptions=True)
 
-    seqs = await sync_to_async(lambda: sorted(
-        d["header"]["seq"] for d in Sample.objects.filter(topic=odom).values_list("data", flat=True)))()
+    kept = Sample.objects.filter(topic=odom, received_at__gte=utc(incident.start), received_at__lte=utc(incident.end))
+    seqs = await sync_to_async(lambda: sorted(d["header"]["seq"] for d in kept.values_list("data", flat=True)))()
     # The minute before and what came after the restart are there, every message numbered in between too:
     # what the first black box took it wrote on stopping, and the second one picked the incident up.
     assert len(seqs) >= 30 and seqs == list(range(seqs[0], seqs[-1] + 1))
-    stamps = await sync_to_async(lambda: sorted(
-        a.timestamp() for a in Sample.objects.filter(topic=odom).values_list("received_at", flat=True)))()
+    stamps = await sync_to_async(lambda: sorted(a.timestamp() for a in kept.values_list("received_at", flat=True)))()
     assert stamps[0] - incident.start < 0.5 and incident.end - stamps[-1] < 0.5
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_an_incident_leaves_topics_the_admin_does_not_record_unrecorded(black_box, link):
+    odom = ri.topic("odom").name  # no policy: not recorded
+    await async_wait_until(lambda: black_box.received > 30, timeout=10, what="the black box hearing the robot")
+    incident = await sync_to_async(incident_open)(kind=Incident.Kind.MANUAL, t=time.time())
+    await async_wait_until(lambda: incident.pk in black_box.windows, timeout=5, what="the incident adopted")
+    await asyncio.sleep(1.0)
+    assert black_box.stored > 0  # the pose (recorded hourly) at full rate
+    assert not await sync_to_async(Sample.objects.filter(topic=odom).exists)()
