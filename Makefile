@@ -59,10 +59,7 @@ run: install
 	$(BIN)/python manage.py migrate --noinput
 	$(BIN)/python manage.py bootstrap
 	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT), server talks to $(ROSBRIDGE_URL); open http://127.0.0.1:$(PORT)/"
-	@trap 'kill 0' INT TERM EXIT; \
-	$(BIN)/python manage.py simrobot --port $(SIM_PORT) --video-port $(VIDEO_PORT) & \
-	ROSBRIDGE_URL='$(ROSBRIDGE_URL)' VIDEO_URL='$(VIDEO_URL)' \
-	  $(BIN)/daphne -b 127.0.0.1 -p $(PORT) server.asgi:application
+	@bash scripts/run.sh '$(BIN)' '$(PORT)' '$(SIM_PORT)' '$(VIDEO_PORT)' '$(ROSBRIDGE_URL)' '$(VIDEO_URL)'
 
 test: install browser nginx
 	bash scripts/test.sh

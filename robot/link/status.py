@@ -156,11 +156,12 @@ class Upkeep(LinkCore):
             connecting = factory.connector is not None and factory.connector.state != "disconnected"
             if keep_open and (proto is not None or connecting):
                 return
-            factory.resetDelay()
+            # Cancel the backoff's pending retry before resetDelay(), which forgets it without
+            # cancelling: it would fire while this connection is up ("can't connect in this state").
             call = getattr(factory, "_callID", None)
             if call is not None and call.active():
                 call.cancel()
-                factory._callID = None
+            factory.resetDelay()
             if proto is not None:
                 proto.dropConnection(abort=True)  # the factory reconnects at once
             elif factory.connector is not None and factory.connector.state == "disconnected":

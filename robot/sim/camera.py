@@ -145,6 +145,10 @@ class VideoServer:
             await self._route(method, url.path, parse_qs(url.query), body, writer)
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError):
             pass
+        except asyncio.CancelledError:
+            # The server stopping (a Ctrl-C): end quietly. Nobody awaits this task, and asyncio's stream
+            # callback on 3.12.1 asks a cancelled one for its exception and logs the CancelledError.
+            pass
         except Exception:
             log.exception("video server request failed")
         finally:

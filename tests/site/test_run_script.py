@@ -1,0 +1,56 @@
+"""`make run`'s last step (scripts/run.sh): the simulator and the server until a Ctrl-C, which stops
+both cleanly: no "Segmentation fault" from the shell, nothing left running, exit status 0, and
+neither the link's first connect nor the stop leaves a traceback in the log."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from tests.stack import ROOT, free_port, wait_for_port
+
+BIN = str(Path(sys.executable).parent)
+
+
+def _listening(port: int) -> bool:
+    import socket
+
+    with socket.socket() as s:
+        return s.connect_ex(("127.0.0.1", port)) == 0
+
+
+def test_a_ctrl_c_stops_the_simulator_and_the_server_cleanly():
+    var = tempfile.mkdtemp(prefix="cyborg-run-")
+    env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")} | {"VAR_DIR": var}
+    subprocess.run([sys.executable, "manage.py", "migrate", "--noinput"], cwd=ROOT, env=env, check=True,
+                   capture_output=True)
+    web, sim, video = free_port(), free_port(), free_port()
+    out = Path(var) / "run.log"
+    with out.open("w") as log:
+        # A session of its own: the signal goes to the whole group, as a terminal's Ctrl-C does.
+        run = subprocess.Popen(["bash", "scripts/run.sh", BIN, str(web), str(sim), str(video),
+                                f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
+                               cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            wait_for_port(web, 30, run)
+            deadline = time.monotonic() + 30
+            while "robot link connected" not in out.read_text() and time.monotonic() < deadline:
+                time.sleep(0.2)
+            assert "robot link connected" in out.read_text(), out.read_text()[-3000:]
+            time.sleep(3)  # the reconnect timer the link's first connect may leave behind would fire now
+            os.killpg(run.pid, signal.SIGINT)
+            assert run.wait(30) == 0, out.read_text()[-3000:]
+        finally:
+            if run.poll() is None:
+                os.killpg(run.pid, signal.SIGKILL)
+    text = out.read_text()
+    assert "Segmentation fault" not in text
+    assert not _listening(web) and not _listening(sim) and not _listening(video)
+    # No CRITICAL Twisted traceback from the link's reconnect timer, no stack of a task the stop ended.
+    assert "can't connect in this state" not in text and "CRITICAL" not in text, text[-4000:]
+    assert "CancelledError" not in text, text[-4000:]
