@@ -1,6 +1,7 @@
 """Liveness: a simulator process frozen with SIGSTOP is "not responding", and commands are refused
 with that reason until it answers again (real process, real rosbridge socket, unmodified roslibpy)."""
 
+import asyncio
 import os
 import signal
 import subprocess
@@ -80,3 +81,23 @@ async def test_a_frozen_robot_is_not_responding_and_refused_commands_until_it_an
                         timeout=10)
     await apublish("register_event", {"data": "aborted"})
     await communicator.disconnect()
+
+
+@pytest.mark.django_db(transaction=True)
+async def test_driving_a_frozen_robot_is_refused_with_the_reason(frozen_link, sim_process, operator):
+    from tests.teleop.support import drive_socket, error_frame, key, lock_frame
+
+    ws = await drive_socket(operator)
+    await ws.send_json_to(key(0.5))
+    await lock_frame(ws, lambda f: f["you"])
+    await ws.send_json_to({"type": "release"})
+    os.kill(sim_process.pid, signal.SIGSTOP)
+    for _ in range(50):
+        if not frozen_link.responding:
+            break
+        await asyncio.sleep(0.1)
+    assert not frozen_link.responding
+    await ws.send_json_to(key(0.5))
+    error = await error_frame(ws)
+    assert "not responding" in error["message"], error
+    await ws.disconnect()
