@@ -13,7 +13,6 @@ import re
 import shutil
 import signal
 import subprocess
-import sys
 import tempfile
 import time
 import urllib.request
@@ -62,16 +61,13 @@ class RobotSide:
 
     def fetch(self, url: str) -> bytes:
         """GET ``url`` from inside the robot's computer."""
-        code = ("import sys, urllib.request\n"
-                "sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1], timeout=5).read())")
-        return subprocess.run([*self.prefix(), sys.executable, "-c", code, url], check=True, capture_output=True,
-                              timeout=20).stdout
+        return subprocess.run([*self.prefix(), "curl", "-sSf", "--max-time", "5", url], check=True,
+                              capture_output=True, timeout=20).stdout
 
     def wait_port(self, port: int, timeout: float = 30.0) -> None:
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            probe = subprocess.run([*self.prefix(), sys.executable, "-c",
-                                    f"import socket; socket.create_connection(('127.0.0.1', {port}), 0.5)"],
+            probe = subprocess.run([*self.prefix(), "bash", "-c", f"exec 3<>/dev/tcp/127.0.0.1/{port}"],
                                    capture_output=True, timeout=10)
             if probe.returncode == 0:
                 return

@@ -8,9 +8,11 @@ import asyncio
 import json
 import os
 import socket
+import subprocess
 import time
+import urllib.request
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import pytest
 from django.conf import settings
@@ -34,14 +36,21 @@ class World:
     agent: Agent
     sim_port: int
     video_port: int
+    clients: dict[str, Client] = field(default_factory=dict)
 
     def received(self, topic: str = "/cmd_vel") -> list[dict]:
         url = f"http://127.0.0.1:{self.video_port}/sim/received?topic={topic}"
         count = json.loads(self.side.fetch(f"{url}&last=0"))["count"]
         return json.loads(self.side.fetch(f"{url}&last={max(count, 1)}"))["messages"]
 
+    def client(self, name: str) -> Client:
+        """One login per person and world (a login hashes a password: slow on purpose)."""
+        if name not in self.clients:
+            self.clients[name] = Client(self.stack, name)
+        return self.clients[name]
+
     def health(self) -> dict:
-        status, body = Client(self.stack, "ada").get("/healthz")
+        status, body = self.client("ada").get("/healthz")
         assert status in (200, 503), body
         return body
 
@@ -84,7 +93,7 @@ def world() -> Iterator[World]:
         "UPLINK": "true", "UPLINK_LISTEN": f"127.0.0.1:{uplink_port}",
         "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(relay_video_port),
         "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{relay_video_port}",
-        "TRUSTED_PROXIES": "127.0.0.1", "TELEOP_LOCK_TTL_S": "1"})
+        "TRUSTED_PROXIES": "127.0.0.1", "TELEOP_LOCK_TTL_S": "1", "CAMERA_RECORD_FPS": "0"})
     front = agent = None
     sim = None
     try:
@@ -102,7 +111,7 @@ def world() -> Iterator[World]:
             rosbridge_url=f"ws://127.0.0.1:{sim_port}", video_url=f"http://127.0.0.1:{video_port}",
             prefix=side.prefix(), UPLINK_CA_FILE=str(ca.ca)).start()
         world.wait_online(timeout=40)
-        assert Client(stack, "otto").post("/api/robot/motors/", {"enabled": True})[0] == 200
+        assert world.client("otto").post("/api/robot/motors/", {"enabled": True})[0] == 200
         yield world
     finally:
         if agent is not None:
@@ -124,7 +133,7 @@ def test_the_dashboard_shows_the_robot_through_its_uplink_and_a_command_reaches_
     assert body["uplink"]["address"] == world.side.robot_ip  # as nginx saw it, through TRUSTED_PROXIES
     assert body["reached"].startswith(f"robot connected through its uplink from {world.side.robot_ip} since ")
     before = len(world.received("/cyborg_audio/text_to_speech"))
-    status, reply = Client(world.stack, "otto").post("/api/robot/speech/", {"text": "hello through the uplink"})
+    status, reply = world.client("otto").post("/api/robot/speech/", {"text": "hello through the uplink"})
     assert status == 200, reply
     wait_until(lambda: len(world.received("/cyborg_audio/text_to_speech")) > before, timeout=5,
                what="the robot said it")
@@ -133,7 +142,7 @@ def test_the_dashboard_shows_the_robot_through_its_uplink_and_a_command_reaches_
 
 async def _drive(world: World, seconds: float, during=None) -> None:
     """A driver's page holding a key (input every 50 ms throughout); ``during`` runs once the robot moves."""
-    client = Client(world.stack, "otto")
+    client = world.client("otto")
     before = len(await asyncio.to_thread(world.received))
     async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
                        additional_headers={"Cookie": client.cookie}) as ws:
@@ -174,7 +183,7 @@ def test_driving_reaches_the_robot_and_a_dropped_uplink_stops_it_from_the_agent(
 
 
 def test_the_estop_stops_the_robot_through_the_uplink_and_its_release_lets_it_drive(world: World) -> None:
-    operator = Client(world.stack, "otto")
+    operator = world.client("otto")
     before = len(world.received())
     status, body = operator.post("/api/robot/estop/", {})
     assert status == 200, body
@@ -201,8 +210,52 @@ def test_the_agent_and_the_server_restarting_are_survived(world: World) -> None:
         world.stack.start_web()
     world.wait_online(timeout=30)
     before = len(world.received("/cyborg_audio/text_to_speech"))
-    assert Client(world.stack, "otto").post("/api/robot/speech/", {"text": "back"})[0] == 200
+    assert world.client("otto").post("/api/robot/speech/", {"text": "back"})[0] == 200
     wait_until(lambda: len(world.received("/cyborg_audio/text_to_speech")) > before, timeout=5, what="a command")
+
+
+def _open(world: World, path: str) -> urllib.request.Request:
+    return urllib.request.Request(f"{world.stack.url}{path}", headers={"Cookie": world.client("vera").cookie})
+
+
+def test_the_camera_comes_through_the_uplink_one_upstream_for_several_viewers(world: World) -> None:
+    with urllib.request.urlopen(_open(world, "/video/snapshot"), timeout=10) as res:
+        assert res.headers["Content-Type"] == "image/jpeg"
+        assert res.read()[:2] == b"\xff\xd8"
+    def streams() -> int:
+        return json.loads(world.side.fetch(f"http://127.0.0.1:{world.video_port}/sim/introspect"))["video_streams"]
+
+    viewers = [urllib.request.urlopen(_open(world, "/video/stream"), timeout=10) for _ in range(3)]
+    try:
+        for viewer in viewers:
+            assert viewer.headers["Content-Type"].startswith("multipart/x-mixed-replace")
+            seen = b""
+            while seen.count(b"--boundarydonotcross") < 2:
+                seen += viewer.read1(65536)
+            assert b"Content-Type: image/jpeg" in seen and b"\xff\xd8" in seen
+        assert streams() == 1  # the robot encodes one stream, however many watch
+    finally:
+        for viewer in viewers:
+            viewer.close()
+
+
+def test_a_stalled_uplink_mid_drive_gets_the_robot_a_zero_twist_from_the_agent(world: World) -> None:
+    stalled: list[float] = []
+
+    def stall() -> None:
+        logged = len(world.agent.log())
+        subprocess.run(["ip", "link", "set", world.side.host_if, "down"], check=True, timeout=10)
+        stalled.append(time.time())
+        try:
+            world.agent.wait_log("stopping the robot: no drive command for", after=logged, timeout=5)
+        finally:
+            subprocess.run(["ip", "link", "set", world.side.host_if, "up"], check=True, timeout=10)
+
+    asyncio.run(_drive(world, 1.0, during=stall))
+    after = [m for m in world.received() if m["t"] > stalled[0]]
+    assert after and not _moving(after[0]), "a moving Twist reached the robot after the stall"
+    world.wait_online(timeout=30)
+    asyncio.run(_drive(world, 0.5))
 
 
 def test_a_revoked_credential_closes_the_live_uplink_within_a_second_and_is_refused(world: World) -> None:
