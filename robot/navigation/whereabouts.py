@@ -20,6 +20,7 @@ from robot.link.connection import RobotLink
 from robot.link.hosting import register_background
 from robot.live.announce import apublish_state
 from robot.live.groups import AT_LOCATION_KEY
+from robot.navigation.seeding import location_seed
 
 # A named place as (name, x, y, arrival radius).
 Place = tuple[str, float, float, float]
@@ -63,13 +64,20 @@ async def track_whereabouts(link: RobotLink) -> None:
     shown: dict[str, str] | None = None
     places: list[Place] = []
     places_at = -math.inf
+    tried: set[str] = set()  # names the robot reported that were seeded (or could not be)
     try:
         while True:
             await wake.wait()
             wake.clear()
             if time.monotonic() - places_at > PLACES_FRESH_S:
                 places, places_at = await sync_to_async(_places)(), time.monotonic()
-            now = whereabouts((latest.get(location_topic) or {}).get("data", ""), latest.get(pose_topic), places)
+            robot_says = (latest.get(location_topic) or {}).get("data", "")
+            pose = latest.get(pose_topic)
+            if robot_says and pose is not None and robot_says not in tried | {p[0] for p in places}:
+                tried.add(robot_says)  # once per name and run: an admin's delete stands until then
+                if await sync_to_async(location_seed)(name=robot_says, pose=pose):
+                    places_at = -math.inf  # look again at once
+            now = whereabouts(robot_says, pose, places)
             if now != shown:
                 shown = now
                 await apublish_state(AT_LOCATION_KEY, now)

@@ -10,6 +10,7 @@ import pytest
 from robot import interface as ri
 from robot.live.groups import AT_LOCATION_KEY
 from robot.models import Location
+from robot.navigation.seeding import location_seed
 from robot.navigation.whereabouts import location_at, track_whereabouts, whereabouts
 from tests.helpers import wait_until
 from tests.navigation.conftest import stored
@@ -51,6 +52,36 @@ def test_it_says_where_the_robot_arrived_at_a_place_only_the_server_knows(sim, n
                    what="the robot's own answer")
     finally:
         tracker.cancel()
+
+
+@pytest.mark.django_db(transaction=True)
+def test_a_place_the_robot_names_becomes_a_named_location_where_it_reported_being(sim, nav_link):
+    Location.objects.filter(name="reception").delete()
+    x, y, yaw = _robot_place(sim, "reception")
+    sim.call(lambda: sim.robot.base.teleport(x, y, yaw))
+    tracker = asyncio.run_coroutine_threadsafe(track_whereabouts(nav_link), nav_link.loop)
+    try:
+        wait_until(lambda: Location.objects.filter(name="reception").exists(), timeout=10,
+                   what="the robot's reception to be seeded")
+        seeded = Location.objects.get(name="reception")
+        assert math.hypot(seeded.x - x, seeded.y - y) < 0.3 and abs(math.remainder(seeded.yaw - yaw, math.tau)) < 0.2
+        assert "robot" in seeded.description
+        # Moved by an admin: the robot's word does not move it back.
+        Location.objects.filter(name="reception").update(x=x + 1.0)
+        sim.call(lambda: sim.robot.base.teleport(-3.0, 0.0, 0.0))
+        sim.call(lambda: sim.robot.base.teleport(x, y, yaw))
+        wait_until(lambda: stored(AT_LOCATION_KEY) == {"name": "reception", "source": "robot"}, timeout=10,
+                   what="the robot back at reception")
+        assert Location.objects.get(name="reception").x == pytest.approx(x + 1.0)
+    finally:
+        tracker.cancel()
+
+
+def test_a_name_that_cannot_be_a_location_is_not_seeded(db):
+    assert location_seed(name="the lobby!", pose=pose(1.0, 2.0)) is False
+    assert location_seed(name="lobby", pose=pose(1.0, 2.0)) is True
+    assert location_seed(name="lobby", pose=pose(5.0, 5.0)) is False
+    assert (Location.objects.get(name="lobby").x, Location.objects.get(name="lobby").y) == (1.0, 2.0)
 
 
 def _robot_place(sim, name: str) -> tuple[float, float, float]:
