@@ -2,6 +2,7 @@
 // phone the pages and the account sit behind the menu button.
 import { initAlertStrip } from "./alert-strip.js";
 import { live } from "./live.js";
+import "./shortcuts.js";
 
 const header = document.querySelector(".topbar");
 const pill = document.getElementById("link-pill");
