@@ -1,0 +1,287 @@
+"""The robot dials out: latencies and costs of the uplink, as real processes across a real boundary.
+
+The simulator and the uplink agent (on the oldest Python here) run in a network namespace the
+server cannot reach; the agent dials nginx (TLS, a test CA) through a latency relay of our own
+(40 ms each way, 10 ms jitter; no kernel netem on this machine) and the server (Daphne, embedded
+link) drives the robot through it. Receive times are the simulator's wall clock (same machine).
+Needs root (ip netns). Usage: ``.venv/bin/python bench/uplink.py``. Prints ``name: value`` lines.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import random
+import socket
+import sys
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+os.environ.setdefault("DJANGO_SETTINGS_MODULE", "cyborg_site.settings")
+
+from _stats import quantile  # noqa: E402
+from websockets.asyncio.client import connect  # noqa: E402
+
+from tests.stack import PYTHON, Stack, free_port  # noqa: E402
+from tests.support_processes import Client  # noqa: E402
+from tests.uplink.netns import Front, RobotSide, TestCA  # noqa: E402
+from tests.uplink.support import Agent  # noqa: E402
+
+DELAY_S, JITTER_S = 0.040, 0.010
+PRESSES = 25
+VIEWERS = 20
+CPU_S = 10.0
+FORWARD = {"type": "input", "linear": 0.3, "angular": 0.0}
+
+
+class LatencyRelay:
+    """TCP from ``listen`` to ``target`` with a delay each way (order kept), on a loop of its own.
+    ``frozen`` holds every byte; ``cut()`` drops every connection."""
+
+    def __init__(self, listen: tuple[str, int], target: tuple[str, int]) -> None:
+        self.listen, self.target = listen, target
+        self.delay_s, self.jitter_s = DELAY_S, JITTER_S
+        self.frozen = False
+        self.loop = asyncio.new_event_loop()
+        self.writers: set[asyncio.StreamWriter] = set()
+        threading.Thread(target=self.loop.run_forever, daemon=True).start()
+        asyncio.run_coroutine_threadsafe(self._start(), self.loop).result(5)
+
+    async def _start(self) -> None:
+        self.server = await asyncio.start_server(self._serve, *self.listen)
+
+    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            up_reader, up_writer = await asyncio.open_connection(*self.target)
+        except OSError:
+            writer.close()
+            return
+        for w in (writer, up_writer):
+            w.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self.writers.add(w)
+        await asyncio.gather(self._pipe(reader, up_writer), self._pipe(up_reader, writer), return_exceptions=True)
+        for w in (writer, up_writer):
+            self.writers.discard(w)
+            w.close()
+
+    async def _pipe(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        queue: asyncio.Queue[tuple[float, bytes]] = asyncio.Queue()
+
+        async def deliver() -> None:
+            while True:
+                due, chunk = await queue.get()
+                while self.frozen or time.monotonic() < due:
+                    await asyncio.sleep(0.001 if not self.frozen else 0.01)
+                writer.write(chunk)
+                await writer.drain()
+
+        sender = asyncio.ensure_future(deliver())
+        last_due = 0.0
+        try:
+            while chunk := await reader.read(65536):
+                delay = max(0.0, self.delay_s + random.uniform(-self.jitter_s, self.jitter_s))
+                last_due = max(last_due, time.monotonic() + delay)  # a later chunk never overtakes
+                queue.put_nowait((last_due, chunk))
+            while not queue.empty():
+                await asyncio.sleep(0.005)
+        finally:
+            sender.cancel()
+            writer.close()
+
+    def cut(self) -> None:
+        def close_all() -> None:
+            for w in list(self.writers):
+                w.transport.abort()
+        self.loop.call_soon_threadsafe(close_all)
+
+
+class World:
+    def __init__(self) -> None:
+        self.side = RobotSide().up()
+        self.ca = TestCA(self.side.host_ip)
+        self.sim_port, self.video_port = free_port(), free_port()
+        uplink_port, relay_port, video_relay_port = free_port(), free_port(), free_port()
+        self.stack = Stack(sim=False, env={
+            "UPLINK": "true", "UPLINK_LISTEN": f"127.0.0.1:{uplink_port}",
+            "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(video_relay_port),
+            "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{video_relay_port}",
+            "TRUSTED_PROXIES": "127.0.0.1", "CAMERA_RECORD_FPS": "0", "CAMERA_STREAMS_PER_PERSON": str(VIEWERS)})
+        self.stack.start()
+        self.sim = self.side.spawn([PYTHON, "manage.py", "simrobot", "--host", "127.0.0.1", "--port",
+                                    str(self.sim_port), "--video-port", str(self.video_port), "--startup-s", "0.5"],
+                                   self.stack.tmp / "sim.log", self.stack.env)
+        self.side.wait_port(self.sim_port)
+        self.front = Front(ip=self.side.host_ip, port=free_port(), uplink_port=uplink_port, ca=self.ca).start()
+        self.relay = LatencyRelay((self.side.host_ip, free_port()), (self.side.host_ip, self.front.port))
+        code = "from robot.uplink.credentials import credential_create\nprint(credential_create(robot='cyborg')[1])"
+        credential = self.stack.manage("shell", "-c", code).strip().splitlines()[-1]
+        self.agent = Agent(server_url=f"wss://{self.side.host_ip}:{self.relay.listen[1]}/uplink/",
+                           credential=credential, rosbridge_url=f"ws://127.0.0.1:{self.sim_port}",
+                           video_url=f"http://127.0.0.1:{self.video_port}", prefix=self.side.prefix(),
+                           UPLINK_CA_FILE=str(self.ca.ca), UPLINK_LOG_LEVEL="WARNING").start()
+        self.operator = Client(self.stack, "otto")
+        self.wait_commands()
+
+    def sim_get(self, path: str) -> dict:
+        return json.loads(self.side.fetch(f"http://127.0.0.1:{self.video_port}{path}"))
+
+    def twists_after(self, count: int) -> list[dict]:
+        total = self.sim_get("/sim/received?topic=/cmd_vel&last=0")["count"]
+        if total <= count:
+            return []
+        return self.sim_get(f"/sim/received?topic=/cmd_vel&last={total - count}")["messages"]
+
+    def twist_count(self) -> int:
+        return self.sim_get("/sim/received?topic=/cmd_vel&last=0")["count"]
+
+    def first_twist(self, count: int, moving: bool, timeout: float = 5.0) -> float:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            hits = [m["t"] for m in self.twists_after(count) if (m["msg"]["linear"]["x"] != 0) == moving]
+            if hits:
+                return hits[0]
+            time.sleep(0.02)
+        raise SystemExit(f"no {'moving' if moving else 'zero'} Twist reached the robot")
+
+    def wait_commands(self, timeout: float = 40.0) -> float:
+        """Until a command works (the speech API answers 200); the seconds it took."""
+        start = time.monotonic()
+        while time.monotonic() - start < timeout:
+            if self.operator.post("/api/robot/speech/", {"text": "ok"}, timeout=5)[0] == 200:
+                return time.monotonic() - start
+            time.sleep(0.05)
+        raise SystemExit(f"commands never worked through the uplink:\n{self.agent.log()[-2000:]}")
+
+    def stop(self) -> None:
+        self.agent.__exit__()
+        self.front.stop()
+        os.killpg(self.sim.pid, 15)
+        self.sim.wait(10)
+        self.stack.stop()
+        self.ca.remove()
+        self.side.down()
+
+
+async def key_to_twist(world: World) -> list[float]:
+    out = []
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+                       additional_headers={"Cookie": world.operator.cookie}) as ws:
+        for i in range(PRESSES + 1):
+            before = await asyncio.to_thread(world.twist_count)
+            sent = time.time()
+            await ws.send(json.dumps(FORWARD))
+            got = await asyncio.to_thread(world.first_twist, before, True)
+            await ws.send(json.dumps({"type": "release"}))
+            await asyncio.to_thread(world.first_twist, before, False)
+            await asyncio.sleep(0.3)
+            if i:  # the first press also takes the drive lock
+                out.append((got - sent) * 1000)
+    return out
+
+
+async def update_to_browser(world: World, seconds: float = 6.0) -> list[float]:
+    out: list[float] = []
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/live/", origin=world.stack.url,
+                       additional_headers={"Cookie": world.operator.cookie}, max_size=None) as ws:
+        await ws.send(json.dumps({"action": "watch", "keys": ["odom"]}))
+        end = time.time() + seconds
+        while time.time() < end:
+            raw = await ws.recv()
+            now = time.time()
+            frame = json.loads(raw)
+            for update in frame.get("updates") or ([frame] if frame.get("kind") == "update" else []):
+                if update.get("key") == "odom":
+                    stamp = update["msg"]["header"]["stamp"]
+                    out.append((now - stamp["secs"] - stamp["nsecs"] / 1e9) * 1000)
+    return out[10:]  # (the snapshot on watching, and the first frames)
+
+
+async def stall_to_zero(world: World) -> float:
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+                       additional_headers={"Cookie": world.operator.cookie}) as ws:
+        before = await asyncio.to_thread(world.twist_count)
+        for _ in range(10):
+            await ws.send(json.dumps(FORWARD))
+            await asyncio.sleep(0.05)
+        await asyncio.to_thread(world.first_twist, before, True)
+        count = await asyncio.to_thread(world.twist_count)
+        world.relay.frozen = True
+        frozen_at = time.time()
+        for _ in range(20):  # the driver keeps pressing: the server cannot reach the robot
+            await ws.send(json.dumps(FORWARD))
+            await asyncio.sleep(0.05)
+        zero_at = await asyncio.to_thread(world.first_twist, count, False)
+    world.relay.cut()  # (what the relay held is dropped, as a dead link would)
+    world.relay.frozen = False
+    return (zero_at - frozen_at) * 1000
+
+
+def video_streams(world: World) -> int:
+    request = urllib.request.Request(f"{world.stack.url}/video/stream", headers={"Cookie": world.operator.cookie})
+    viewers = [urllib.request.urlopen(request, timeout=10) for _ in range(VIEWERS)]
+    try:
+        for viewer in viewers:
+            seen = b""
+            while seen.count(b"--boundarydonotcross") < 2:
+                seen += viewer.read1(65536)
+        return int(world.sim_get("/sim/introspect")["video_streams"])
+    finally:
+        for viewer in viewers:
+            viewer.close()
+
+
+def agent_cpu_pct(world: World, seconds: float = CPU_S) -> float:
+    """The agent's CPU over ``seconds`` while the link holds every monitored topic (the robot's load)."""
+    assert world.agent.proc is not None
+    ticks = os.sysconf("SC_CLK_TCK")
+
+    def used() -> float:
+        fields = Path(f"/proc/{world.agent.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / ticks
+
+    start, at = used(), time.monotonic()
+    time.sleep(seconds)
+    return (used() - start) / (time.monotonic() - at) * 100
+
+
+def main() -> None:
+    if os.geteuid() != 0:
+        raise SystemExit("bench/uplink.py needs root (a network namespace for the robot's side)")
+    world = World()
+    try:
+        cpu = agent_cpu_pct(world)
+        world.relay.delay_s, world.relay.jitter_s = 0.0, 0.0
+        no_delay = asyncio.run(key_to_twist(world))
+        world.relay.delay_s, world.relay.jitter_s = DELAY_S, JITTER_S
+        world.relay.cut()
+        world.wait_commands()
+        delayed = asyncio.run(key_to_twist(world))
+        updates = asyncio.run(update_to_browser(world))
+        stall = asyncio.run(stall_to_zero(world))
+        reconnect = world.wait_commands()
+        time.sleep(1)
+        world.relay.cut()
+        reconnect = max(reconnect, world.wait_commands())
+        streams = video_streams(world)
+    finally:
+        world.stop()
+    print(f"uplink_key_to_twist_p99_ms: {quantile(sorted(delayed), 0.99):.1f}")
+    print(f"uplink_key_to_twist_p50_ms: {quantile(sorted(delayed), 0.5):.1f}")
+    print(f"uplink_key_to_twist_p99_ms_no_delay: {quantile(sorted(no_delay), 0.99):.1f}")
+    print(f"uplink_update_to_browser_p99_ms: {quantile(sorted(updates), 0.99):.1f}")
+    print(f"uplink_update_to_browser_p50_ms: {quantile(sorted(updates), 0.5):.1f}")
+    print(f"uplink_stall_to_zero_twist_ms: {stall:.0f}")
+    print(f"uplink_reconnect_s: {reconnect:.2f}")
+    print(f"uplink_video_upstream_streams: {streams} (for {VIEWERS} viewers)")
+    print(f"uplink_agent_cpu_pct: {cpu:.1f}")
+    print(f"uplink_injected_delay_ms: {DELAY_S * 1000:.0f} each way, jitter {JITTER_S * 1000:.0f}")
+
+
+if __name__ == "__main__":
+    main()
