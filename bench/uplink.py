@@ -239,10 +239,10 @@ def video_streams(world: World) -> int:
 def agent_cpu_pct(world: World, seconds: float = CPU_S) -> float:
     """The agent's CPU over ``seconds`` while the link holds every monitored topic (the robot's load)."""
     assert world.agent.proc is not None
-    ticks = os.sysconf("SC_CLK_TCK")
+    pid, ticks = world.agent.proc.pid, os.sysconf("SC_CLK_TCK")
 
     def used() -> float:
-        fields = Path(f"/proc/{world.agent.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
         return (int(fields[11]) + int(fields[12])) / ticks
 
     start, at = used(), time.monotonic()
