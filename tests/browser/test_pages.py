@@ -217,3 +217,4 @@ def test_the_estop_is_on_every_page_on_screen_clickable_and_clear_of_every_contr
             page.evaluate(LONG_TOPIC)
         assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0, f"{path} scrolls sideways at {page.viewport['width']} px"
         assert page.evaluate(ESTOP_CLEAR) == [], path
+        assert "{#" not in page.locator("body").inner_text(), f"{path} shows a template comment"
