@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from django.contrib.auth.models import AnonymousUser, User
 from rest_framework import serializers
 
+from cyborg_site.text import text_problem
 from robot.alerts import push
 from robot.alerts.models import KINDS, SEVERITY_RANK, AlertChoice, PushSubscription
 
 FIELDS = ("by_email", "by_push", "kinds", "min_severity")
+_BASE64URL = re.compile(r"[A-Za-z0-9_-]+={0,2}")
 
 
 def _person(user: User | AnonymousUser) -> User:
@@ -55,9 +58,11 @@ def push_subscribe(user: User | AnonymousUser, data: dict[str, Any]) -> None:
     endpoint, keys = data.get("endpoint"), data.get("keys")
     if not isinstance(endpoint, str) or not endpoint.startswith(("https://", "http://")) or len(endpoint) > 1000:
         raise serializers.ValidationError({"endpoint": ["a push service URL"]})
+    if text_problem(endpoint, limit=1000):
+        raise serializers.ValidationError({"endpoint": [str(text_problem(endpoint, limit=1000))]})
     if not isinstance(keys, dict) or not all(isinstance(keys.get(k), str) and 0 < len(keys[k]) <= 200
-                                             for k in ("p256dh", "auth")):
-        raise serializers.ValidationError({"keys": ["p256dh and auth, as the browser gives them"]})
+                                             and _BASE64URL.fullmatch(keys[k]) for k in ("p256dh", "auth")):
+        raise serializers.ValidationError({"keys": ["p256dh and auth, as the browser gives them (base64url)"]})
     PushSubscription.objects.update_or_create(endpoint=endpoint, defaults={
         "user": person, "p256dh": keys["p256dh"], "auth": keys["auth"]})
 

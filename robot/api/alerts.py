@@ -15,13 +15,22 @@ from robot.api.base import robot_api_view
 from robot.api.common import error_responses
 from robot.api.validation import body_object
 
-AlertOut = inline_serializer(name="Alert", fields={
-    "id": serializers.CharField(), "key": serializers.CharField(), "kind": serializers.CharField(),
-    "severity": serializers.CharField(), "text": serializers.CharField(),
-    "started_at": serializers.FloatField(help_text="epoch seconds"), "updated_at": serializers.FloatField(),
-    "ended_at": serializers.FloatField(allow_null=True), "count": serializers.IntegerField(),
-    "acked_by": serializers.CharField(), "acked_at": serializers.FloatField(allow_null=True)})
-Alerts = inline_serializer(name="Alerts", fields={"on": AlertOut, "history": AlertOut})
+
+class AlertOut(serializers.Serializer):
+    id = serializers.CharField()
+    key = serializers.CharField()
+    kind = serializers.CharField()
+    severity = serializers.CharField()
+    text = serializers.CharField()
+    started_at = serializers.FloatField(help_text="epoch seconds")
+    updated_at = serializers.FloatField()
+    ended_at = serializers.FloatField(allow_null=True)
+    count = serializers.IntegerField()
+    acked_by = serializers.CharField()
+    acked_at = serializers.FloatField(allow_null=True)
+
+
+Alerts = inline_serializer(name="Alerts", fields={"on": AlertOut(many=True), "history": AlertOut(many=True)})
 
 
 @extend_schema(responses={200: Alerts}, summary="The alerts on now, and the latest ones with their end",
@@ -44,10 +53,16 @@ def acknowledge_view(request: Request, alert_id: str) -> Response:
 Choice = inline_serializer(name="AlertChoice", fields={
     "by_email": serializers.BooleanField(), "by_push": serializers.BooleanField(),
     "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField()})
+ChoiceOut = inline_serializer(name="AlertChoiceOut", fields={
+    "by_email": serializers.BooleanField(), "by_push": serializers.BooleanField(),
+    "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField(),
+    "email": serializers.CharField(), "kinds_available": serializers.DictField(child=serializers.CharField()),
+    "push_public_key": serializers.CharField(help_text="the VAPID applicationServerKey (base64url)"),
+    "push_browsers": serializers.IntegerField()})
 
 
-@extend_schema(methods=["GET"], responses={200: Choice}, summary="Which alerts reach you outside the page")
-@extend_schema(methods=["PATCH"], request=Choice, responses={200: Choice, **error_responses(400)},
+@extend_schema(methods=["GET"], responses={200: ChoiceOut}, summary="Which alerts reach you outside the page")
+@extend_schema(methods=["PATCH"], request=Choice, responses={200: ChoiceOut, **error_responses(400)},
                summary="Choose which alerts reach you (e-mail, Web Push) and from which severity")
 @robot_api_view(["GET", "PATCH"])
 def alert_choice_view(request: Request) -> Response:
