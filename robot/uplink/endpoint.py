@@ -39,6 +39,7 @@ log = logging.getLogger(__name__)
 RECHECK_S = 0.25
 PING_INTERVAL_S = 5.0
 PING_TIMEOUT_S = 10.0
+CLOSE_TIMEOUT_S = 2.0  # an agent that does not answer our close is cut off after this
 # Close codes the agent sees (and the audit names).
 TAKEN_OVER, REVOKED, TOO_FAST, NOT_UPLINK = 4000, 4001, 4002, 4003
 
@@ -51,6 +52,10 @@ _db = ThreadPoolExecutor(max_workers=1, thread_name_prefix="uplink-db")
 def _fresh[T](fn: Callable[..., T], **kwargs: Any) -> T:
     connection.close_if_unusable_or_obsolete()  # a database restarted since the last call
     return fn(**kwargs)
+
+
+def _close_connection() -> None:
+    connection.close()  # (the connection of the thread this runs in)
 
 
 async def in_db[T](fn: Callable[..., T], **kwargs: Any) -> T:
@@ -104,7 +109,8 @@ class UplinkEndpoint:
         self._server = await serve(
             self._serve, self.host, self.port, process_request=self._authenticate,
             max_size=self.max_frame_bytes, open_timeout=self.auth_timeout_s, compression=None,
-            ping_interval=PING_INTERVAL_S, ping_timeout=PING_TIMEOUT_S, server_header=None)
+            ping_interval=PING_INTERVAL_S, ping_timeout=PING_TIMEOUT_S, close_timeout=CLOSE_TIMEOUT_S,
+            server_header=None)
         log.info("uplink endpoint listening on %s:%d for robot %r", self.host, self.port, self.robot)
 
     async def stop(self) -> None:
@@ -114,6 +120,8 @@ class UplinkEndpoint:
                 await asyncio.wait_for(self._server.wait_closed(), 3)
             self._server = None
         await self.relays.stop()
+        with contextlib.suppress(Exception):  # its database thread's connection goes with it
+            await asyncio.wait_for(asyncio.get_running_loop().run_in_executor(_db, _close_connection), 2)
 
     def _address(self, connection: ServerConnection, request: Request) -> str:
         peer = str((connection.remote_address or ("",))[0])

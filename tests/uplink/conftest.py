@@ -7,7 +7,7 @@ from tests.uplink.support import Agent, make_credential
 
 
 @pytest.fixture
-async def endpoint(settings):
+async def endpoint(settings, transactional_db):
     """The uplink endpoint and its relays on the test's event loop, on free ports."""
     from robot.uplink import hosting
 

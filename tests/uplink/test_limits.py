@@ -18,7 +18,7 @@ pytestmark = [pytest.mark.wiring, pytest.mark.django_db(transaction=True)]
 
 
 @pytest.fixture
-async def strict(settings):
+async def strict(settings, transactional_db):
     """An endpoint that takes frames up to 4 KB and 20 messages a second."""
     from robot.uplink import hosting
 
@@ -75,7 +75,8 @@ async def test_a_second_uplink_for_the_robot_takes_over_and_says_so(strict, cred
     async with _agent(strict, credential[1]) as first:
         await async_wait_until(lambda: strict.live is not None, timeout=5, what="first uplink open")
         async with _agent(strict, credential[1]):
-            await async_wait_until(lambda: first.close_code is not None, timeout=5, what="the take-over")
+            await async_wait_until(lambda: first.close_code is not None and strict.live is not None, timeout=5,
+                                   what="the take-over")
             assert first.close_code == 4000 and strict.live is not None
             assert len(await _outcomes("uplink.takeover", wait_for="took over from 127.0.0.1")) == 1
     await _outcomes("uplink.disconnect", wait_for="taken over by 127.0.0.1")
