@@ -106,3 +106,33 @@ async def test_revoking_the_credential_closes_its_live_uplink_at_once(sim, endpo
     assert len(gone) == 1 and "revoked" in gone[0].outcome
     await async_wait_until(lambda: "the server refused the uplink" in agent.log(), timeout=5, what="a refusal")
     assert endpoint.live is None
+
+
+async def test_it_dials_through_an_http_proxy(sim, endpoint, credential, agent_for):
+    """A proxy that allows CONNECT (a campus network's), here a small one of the test's own."""
+    tunnels: list[str] = []
+
+    async def proxy(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        head = await reader.readuntil(b"\r\n\r\n")
+        target = head.split(b" ")[1].decode()
+        tunnels.append(target)
+        host, port = target.rsplit(":", 1)
+        up_reader, up_writer = await asyncio.open_connection(host, int(port))
+        writer.write(b"HTTP/1.1 200 Connection established\r\n\r\n")
+
+        async def pipe(src: asyncio.StreamReader, dst: asyncio.StreamWriter) -> None:
+            while chunk := await src.read(65536):
+                dst.write(chunk)
+                await dst.drain()
+            dst.close()
+
+        await asyncio.gather(pipe(reader, up_writer), pipe(up_reader, writer), return_exceptions=True)
+
+    server = await asyncio.start_server(proxy, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    try:
+        agent = agent_for(credential[1], UPLINK_PROXY=f"http://127.0.0.1:{port}")
+        await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
+        assert tunnels == [f"127.0.0.1:{endpoint.port}"]
+    finally:
+        server.close()
