@@ -70,7 +70,7 @@ class AlertEngine:
             self.pressed = pressed
         elif key == "rosout":
             signal = rules.log_line(msg, t)
-            if signal is not None:
+            if signal is not None and t - signal.at <= EVENT_QUIET_S:  # a line from long ago is history
                 self.apply(signal, t)
         elif key == "diagnostics":
             new = diag.components_from_message(msg, t)

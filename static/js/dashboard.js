@@ -1,10 +1,8 @@
-// The dashboard: live cards, alerts, the robot log, and the command cards.
+// The dashboard: live cards, the robot log, and the command cards (alerts: the header's strip, alert-strip.js).
 import { notify } from "./api.js";
-import { AlertStrip } from "./alerts.js";
 import { initAudio } from "./audio.js";
 import { initCommands } from "./commands.js";
 import { readConfig } from "./config.js";
-import { diagnosticAlerts } from "./diagnostic-alerts.js";
 import { live } from "./live.js";
 import { SensorsCard } from "./sensors.js";
 import { formatAge, formatTime } from "./time.js";
@@ -19,7 +17,6 @@ const renderers = {
     const pct = Math.round(m.data * 1000) / 10;
     set("battery.percent", `${pct.toFixed(1)} %`);
     field("battery.meter").forEach((el) => { el.value = pct; });
-    alertIf("battery", pct < config.battery_low_percent, `Battery low: ${pct.toFixed(1)} %`);
   },
   battery_voltage(m) { set("battery.voltage", `${m.data.toFixed(2)} V`); },
   battery_recharge_state(m) {
@@ -62,13 +59,11 @@ const renderers = {
   tts_feedback(m) { set("tts.feedback", m.data); },
   rosout(m, t) { logLine(m, t); },
   bumper_state(m) {
-    const pressed = sensors.showBumpers(m);
-    alertIf("bumper", pressed.length > 0, `Bumper pressed: ${pressed.join(" and ")}`, "warn");
+    sensors.showBumpers(m);
   },
   overlay_sonar(m) { sensors.showSonar(m); },
   diagnostics_summary(m) {
     sensors.showDiagnostics(m);
-    diagnostics(m);
   },
 };
 
@@ -96,10 +91,6 @@ function renderHeadline() {
   set("smach.current", fromStatus ? chain[chain.length - 1] : (change?.msg.to_system_state ?? "—"));
 }
 
-// --- alerts strip ----------------------------------------------------------------------
-const alerts = new AlertStrip(document.getElementById("alerts"), { ttlS: config.alert_ttl_s });
-const alertIf = (id, on, text, level) => alerts.condition(id, on, text, level);
-const diagnostics = diagnosticAlerts(alerts);
 const sensors = new SensorsCard(document.getElementById("card-sensors"));
 
 // --- log console -----------------------------------------------------------------------
@@ -118,9 +109,6 @@ function stampOf(m, t) {
 
 function logLine(m, t) {
   m.at = stampOf(m, t);
-  if (m.level >= 8) {
-    alerts.event(`log-${m.name}`, `${config.log_levels[m.level]} from ${m.name}: ${m.msg}`, { at: m.at });
-  }
   if (paused) { held.push(m); document.getElementById("log-held").textContent = `${held.length} new lines held while paused`; return; }
   appendLine(m);
 }
@@ -152,7 +140,6 @@ document.getElementById("log-clear").addEventListener("click", () => {
   logBox.replaceChildren();
   held.length = 0;
   document.getElementById("log-held").textContent = "";
-  alerts.clear();
 });
 
 // --- connection card and ages ----------------------------------------------------------
@@ -175,7 +162,6 @@ function renderStatus(s) {
     if (s.url) set("link.url", s.uplink ? uplinkText(s.uplink) : s.url);
   }
   document.getElementById("card-connection").classList.toggle("bad", !s.connected);
-  alertIf("offline", !s.connected, s.server_down ? "Lost the connection to the server; retrying…" : "Robot offline: values below are the last known ones.", "error");
 }
 
 function tickAges() {

@@ -1,6 +1,6 @@
-"""What an operator meets every day, at a desktop and a phone width: alerts that can be
-dismissed and cleared and that expire on an open page, one time zone everywhere (labelled), every command
-confirmed, a scale on the map."""
+"""What an operator meets every day, at a desktop and a phone width: alerts with the time they began,
+acknowledged once for every page and kept in the history, one time zone everywhere (labelled), every
+command confirmed, a scale on the map."""
 
 from __future__ import annotations
 
@@ -16,7 +16,6 @@ import pytest
 from django.conf import settings
 from playwright.sync_api import expect
 
-from dashboard.selectors import ALERT_TTL_S
 from tests.browser.support import login
 
 pytestmark = pytest.mark.browser
@@ -37,64 +36,43 @@ def robot_logs(stack, node: str, text: str, *, age_s: float = 0.0, level: int = 
         assert json.load(res)["published"] == 1
 
 
-def test_alerts_have_a_time_a_dismiss_and_stay_cleared(sized_page, stack):
+def test_alerts_have_a_time_an_acknowledgement_and_a_history(sized_page, stack):
     page = sized_page
     node = f"/alerting_{page.width_name}"
+    zone = datetime.now(ZoneInfo(settings.TIME_ZONE)).strftime("%Z")
     login(page, stack, "otto")
     expect(page.locator("#link-pill")).to_have_text("robot online")
-    page.click("#log-clear")  # whatever other tests made the robot log before
-    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)
-    robot_logs(stack, f"{node}_old", "from long ago", age_s=3600)  # older than the alert lifetime
+    robot_logs(stack, f"{node}_old", "from long ago", age_s=3600)  # older than an alert's lifetime
     robot_logs(stack, node, "laser driver died")
-    alert = page.locator(f'.alert[data-alert="log-{node}"]')
+    alert = page.locator(f'#alert-strip [data-alert-key="log:{node}"]')
     expect(alert).to_contain_text(f"ERROR from {node}: laser driver died")
-    expect(alert.locator("time")).to_have_text(re.compile(rf"^{CLOCK}$"))
+    expect(alert.locator("time")).to_have_text(re.compile(rf"^{CLOCK} {zone}$"))
+    began = alert.locator("time").get_attribute("datetime")
     # The robot log shows the line with its date, in the site's zone.
     line = page.locator(".log-line", has_text=f"{node}: laser driver died").first
     expect(line).to_have_text(re.compile(rf"^{DATE_TIME} \[ERROR\] {node}: laser driver died$"))
     # The same source again: one alert that counts, not a pile.
     robot_logs(stack, node, "laser driver died")
-    expect(alert.locator(".notice-count")).to_have_text("×2")
-    expect(page.locator(f'.alert[data-alert="log-{node}_old"]')).to_have_count(0)
+    expect(alert.locator(".strip-count")).to_have_text("×2")
     for k in range(4):
         robot_logs(stack, f"{node}_{k}", "also broken")
-    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(3)
-    expect(page.locator(".alerts-more")).to_contain_text("2 more sources report errors")
+    expect(page.locator("#alert-strip .strip-more")).to_contain_text("more alert")  # three shown, the rest behind it
+    expect(page.locator(f'#alert-strip [data-alert-key="log:{node}_old"]')).to_have_count(0)
 
-    newest = page.locator(f'.alert[data-alert="log-{node}_3"]')
-    newest.get_by_role("button", name="Dismiss").click()
+    # Acknowledged, it goes from every page, and stays gone after a reload; the history keeps who and when.
+    page.locator("#alert-strip .strip-more").click()
+    newest = page.locator(f'#alert-strip [data-alert-key="log:{node}_3"]')
+    newest.get_by_role("button", name="Acknowledge").click()
     expect(newest).to_have_count(0)
     page.reload()
-    # The dismissed one stays away; the others are still there (and one of them still behind "more").
-    expect(page.locator(f'.alert[data-alert="log-{node}_2"]')).to_be_visible()
-    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(3)
-    expect(page.locator(".alerts-more")).to_contain_text("1 more source reports errors")
-    expect(page.locator(f'.alert[data-alert="log-{node}_3"]')).to_have_count(0)
-
-    page.click("#log-clear")
-    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)
-    expect(page.locator(".alerts-more")).to_have_count(0)
-    page.reload()
-    expect(page.locator(".log-line", has_text="laser driver died").first).to_be_visible()  # the log replays…
-    expect(page.locator(".alert[data-alert^='log-']")).to_have_count(0)  # …but the cleared alerts stay away
-    robot_logs(stack, node, "laser driver died again")
-    expect(alert).to_contain_text("laser driver died again")
-
-
-def test_an_alert_expires_on_an_open_page(sized_page, stack):
-    page = sized_page
-    node = f"/expiring_{page.width_name}"
-    page.clock.install()  # the page's clock runs on as usual until it is moved forward
-    login(page, stack, "otto")
-    expect(page.locator("#link-pill")).to_have_text("robot online")
-    robot_logs(stack, node, "sonar timeout")
-    alert = page.locator(f'.alert[data-alert="log-{node}"]')
-    expect(alert).to_be_visible()
-    page.clock.run_for((ALERT_TTL_S - 60) * 1000)  # not yet
-    expect(alert).to_be_visible()
-    page.clock.run_for(120 * 1000)
-    expect(alert).to_have_count(0)
-    expect(page.locator(".log-line", has_text=f"{node}: sonar timeout").first).to_be_visible()  # the log keeps it
+    page.locator("#alert-strip .strip-more").click()
+    expect(page.locator(f'#alert-strip [data-alert-key="log:{node}_2"]')).to_be_visible()
+    expect(page.locator(f'#alert-strip [data-alert-key="log:{node}_3"]')).to_have_count(0)
+    # When it began survives the reload.
+    expect(alert.locator("time")).to_have_attribute("datetime", began)
+    page.goto(f"{stack.url}/alerts/")
+    row = page.locator("#alert-history tr", has_text=f"ERROR from {node}_3: also broken")
+    expect(row).to_contain_text("otto")
 
 
 def test_times_are_in_the_site_zone_and_labelled(sized_page, stack):
