@@ -176,7 +176,9 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
         except direct.Unreachable:
             pass  # no link listens there (an older one, or none yet): the usual way
     # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
-    if request["op"] not in ("reconnect", "topics_watch"):
+    # These reach a link whose robot is away: leases of watched topics (it subscribes on return), and
+    # acknowledging an alert (the robot being offline is one).
+    if request["op"] not in ("reconnect", "topics_watch", "alert_ack"):
         view = status_view((await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY))
         if not (view["robot_connected"] or view.get("connecting")):
             raise RobotOffline(f"Robot offline: no connection to {settings.ROSBRIDGE_URL}")

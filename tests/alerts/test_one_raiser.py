@@ -27,6 +27,10 @@ def wait_for(fetch, predicate, timeout: float = 20.0):
         time.sleep(0.1)
 
 
+def alerts_on(client: Client) -> dict[str, dict]:
+    return {a["key"]: a for a in client.get("/api/alerts/")[1]["on"]}
+
+
 def test_one_alert_per_event_across_two_web_processes_and_two_links():
     redis = PrivateRedis().start()
     try:
@@ -75,5 +79,13 @@ def test_one_alert_per_event_across_two_web_processes_and_two_links():
             assert [x["key"] for x in alerts(webs[0])["history"]].count("log:/twice") == 1
             assert standby.poll() is None
             ros.close()
+
+            # The robot gone: the offline alert is acknowledged from a web process, shown by the link.
+            stack.stop_sim()
+            offline = wait_for(lambda: alerts_on(webs[0]), lambda on: "offline" in on, timeout=20)["offline"]
+            status, body = webs[0].post(f"/api/alerts/{offline['id']}/ack/")
+            assert status == 200, body
+            acked = wait_for(lambda: alerts_on(webs[1]), lambda on: on.get("offline", {}).get("acked_by"))
+            assert acked["offline"]["acked_by"] == "otto" and acked["offline"]["id"] == offline["id"]
     finally:
         redis.stop()
