@@ -13,7 +13,9 @@
 # DATABASE_URL (postgres://postgres@127.0.0.1:5432/cyborg_stack, created if missing),
 # REDIS_URL (redis://127.0.0.1:6379/0), CHANNEL_LAYER_PREFIX (cyborg-stack),
 # ROSBRIDGE_URL (unset: the bundled simulator is started, with STACK_SIM_ARGS),
-# STACK_ENV (extra NAME=value lines for the environment file).
+# STACK_ENV (extra NAME=value lines for the environment file),
+# STACK_UPLINK (set: the robot dials in: an uplink agent beside the simulator connects through nginx at
+# /uplink/ to the active link on STACK_UPLINK_PORT (8493), whose relays use 8494 and 8495).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -26,6 +28,7 @@ read -r WEB_A WEB_B <<<"${STACK_WEB_PORTS:-8401 8402}"
 SIM_PORT=${STACK_SIM_PORT:-9490}
 VIDEO_PORT=${STACK_VIDEO_PORT:-8490}
 LINK_PORTS=${STACK_LINK_PORTS:-127.0.0.1:8491,127.0.0.1:8492}
+UPLINK_PORT=${STACK_UPLINK_PORT:-8493}
 PIDS=$STACK_DIR/pids
 LOGS=$STACK_DIR/logs
 ENV_FILE=$STACK_DIR/cyborg.env
@@ -59,8 +62,15 @@ write_env() {
     echo "DATABASE_URL=${DATABASE_URL:-postgres://postgres@127.0.0.1:5432/cyborg_stack}"
     echo "REDIS_URL=${REDIS_URL:-redis://127.0.0.1:6379/0}"
     echo "CHANNEL_LAYER_PREFIX=${CHANNEL_LAYER_PREFIX:-cyborg-stack}"
-    echo "ROSBRIDGE_URL=${ROSBRIDGE_URL:-ws://127.0.0.1:$SIM_PORT}"
-    echo "VIDEO_URL=${VIDEO_URL:-http://127.0.0.1:$VIDEO_PORT}"
+    if [[ -n "${STACK_UPLINK:-}" ]]; then
+      echo "UPLINK=true"
+      echo "UPLINK_LISTEN=127.0.0.1:$UPLINK_PORT"
+      echo "UPLINK_ROSBRIDGE_PORT=$((UPLINK_PORT + 1))"
+      echo "UPLINK_VIDEO_PORT=$((UPLINK_PORT + 2))"
+    else
+      echo "ROSBRIDGE_URL=${ROSBRIDGE_URL:-ws://127.0.0.1:$SIM_PORT}"
+      echo "VIDEO_URL=${VIDEO_URL:-http://127.0.0.1:$VIDEO_PORT}"
+    fi
     echo "ROBOT_LINK_DIRECT_ADDRESSES=$LINK_PORTS"
     echo "CYBORG_STACK=$STACK_DIR"  # marks our processes (checked before any is signalled)
     if [[ -n "${STACK_ENV:-}" ]]; then printf "%s\n" "$STACK_ENV"; fi
@@ -94,6 +104,7 @@ start() {
 names() {
   if [[ -z "${ROSBRIDGE_URL:-}" ]]; then echo sim; fi
   echo link-a link-b web-a web-b worker beat nginx
+  if [[ -n "${STACK_UPLINK:-}" ]]; then echo agent; fi
 }
 
 launch() {
@@ -105,6 +116,10 @@ launch() {
     worker) start worker "$BIN/celery" -A cyborg_site worker --loglevel=INFO --concurrency=1 --without-gossip \
               --without-mingle ;;
     beat) start beat "$BIN/celery" -A cyborg_site beat --loglevel=INFO --schedule="$STACK_DIR/var/celerybeat-schedule" ;;
+    agent) start agent env UPLINK_SERVER_URL="wss://localhost:$HTTPS_PORT/uplink/" \
+             UPLINK_CREDENTIAL_FILE="$STACK_DIR/uplink-credential" UPLINK_CA_FILE="$STACK_DIR/tls/fullchain.pem" \
+             UPLINK_ROSBRIDGE_URL="ws://127.0.0.1:$SIM_PORT" UPLINK_VIDEO_URL="http://127.0.0.1:$VIDEO_PORT" \
+             "$BIN/python" -m uplink_agent ;;
     nginx) start nginx "$NGINX" -e "$LOGS/nginx-error.log" -p "$STACK_DIR/nginx" -c "$STACK_DIR/nginx/nginx.conf" \
              -g "daemon off;" ;;
     *) say "no process called $1 (one of: $(names | tr '\n' ' '))"; exit 2 ;;
@@ -173,6 +188,7 @@ write_nginx() {
       -e "s|/srv/cyborg/staticfiles/|$STACK_DIR/var/staticfiles/|" \
       -e "s|server 127.0.0.1:8001 |server 127.0.0.1:$WEB_A |" \
       -e "s|server 127.0.0.1:8002 |server 127.0.0.1:$WEB_B |" \
+      -e "s|server 127.0.0.1:8770 |server 127.0.0.1:$UPLINK_PORT |" \
       deploy/nginx/cyborg.conf >"$conf/site.conf"
   if [[ $(id -u) == 0 ]]; then user_line="user root;"; fi
   cat >"$conf/nginx.conf" <<EOF
@@ -210,6 +226,11 @@ up() {
   in_env "$BIN/python" manage.py collectstatic --noinput >>"$LOGS/setup.log"
   in_env "$BIN/python" manage.py migrate --noinput >>"$LOGS/setup.log"
   in_env "$BIN/python" manage.py bootstrap >>"$LOGS/setup.log"
+  if [[ -n "${STACK_UPLINK:-}" ]]; then  # the robot's credential, as an admin would make it
+    install -m 600 /dev/null "$STACK_DIR/uplink-credential"
+    in_env "$BIN/python" manage.py shell -c "from robot.uplink.credentials import credential_create
+print(credential_create(robot='cyborg', label='stack.sh')[1])" | tail -n 1 >"$STACK_DIR/uplink-credential"
+  fi
   write_nginx
   for name in $(names); do launch "$name"; done
   if [[ -z "${ROSBRIDGE_URL:-}" ]]; then wait_port "$SIM_PORT" 30 simulator; fi
@@ -227,7 +248,7 @@ up() {
 down() {
   [[ -d $PIDS ]] || { say "nothing to stop in $STACK_DIR"; return 0; }
   # The front first (no new work), the links last (they release the lease and flush history).
-  stop nginx web-a web-b beat worker link-b link-a sim
+  stop agent nginx web-a web-b beat worker link-b link-a sim
   say "down"
 }
 
