@@ -5,6 +5,7 @@ from django.http import HttpRequest
 from django.urls import reverse
 
 from cyborg_site.roles import is_admin, is_operator, role_of
+from dashboard.preferences import theme
 from dashboard.routing import LIVE_SOCKET_PATH
 from robot.commands.latch import latch
 
@@ -19,6 +20,7 @@ def roles(request: HttpRequest) -> dict[str, Any]:
         "can_command": is_operator(user),
         "can_admin": is_admin(user),
         "stale_after_s": settings.STALE_AFTER_S,
+        "theme": theme(user) if user is not None else "system",
     }
 
 
@@ -39,6 +41,7 @@ def site_config(request: HttpRequest) -> dict[str, Any]:
                 "login": reverse("login"),
                 "estop": reverse("robot-estop"),
                 "estop_release": reverse("robot-estop-release"),
+                "theme": reverse("api-theme"),
             },
             "commands": {name: reverse(f"api-robot-{name}") for name in COMMAND_NAMES},
         },

@@ -36,3 +36,24 @@ def set_map_overlays(user: User | AnonymousUser, changes: dict[str, Any]) -> dic
     merged = {**map_overlays(user), **changes}
     UserPreference.objects.update_or_create(user=user, name=MAP_OVERLAYS, defaults={"value": merged})
     return merged
+
+
+THEME = "theme"
+# "system" follows the browser's prefers-color-scheme; "light" and "dark" override it for this person.
+THEMES = ("system", "light", "dark")
+
+
+def theme(user: User | AnonymousUser) -> str:
+    """The colour theme ``user`` chose ("system" until they choose)."""
+    if not user.is_authenticated:
+        return "system"
+    row = UserPreference.objects.filter(user=user, name=THEME).first()
+    value = row.value.get("theme") if row is not None and isinstance(row.value, dict) else None
+    return value if value in THEMES else "system"
+
+
+def set_theme(user: User | AnonymousUser, value: Any) -> str:
+    if value not in THEMES:
+        raise serializers.ValidationError({"theme": [f"must be one of {', '.join(THEMES)}"]})
+    UserPreference.objects.update_or_create(user=user, name=THEME, defaults={"value": {"theme": value}})
+    return str(value)

@@ -9,7 +9,7 @@ from dashboard.views.health import healthz
 from dashboard.views.home import home
 from dashboard.views.introspection import diagnostics, statemachine
 from dashboard.views.map import costmap_tile, map_image, map_page
-from dashboard.views.preferences import map_overlays_view
+from dashboard.views.preferences import map_overlays_view, theme_view
 from dashboard.views.topics import topics_page
 from dashboard.views.video import video_snapshot, video_stream
 
@@ -33,4 +33,5 @@ urlpatterns = [
 
 api_urlpatterns = [
     path("me/map-overlays/", map_overlays_view, name="api-map-overlays"),
+    path("me/theme/", theme_view, name="api-theme"),
 ]

@@ -7,7 +7,7 @@ from rest_framework import serializers
 from rest_framework.request import Request
 from rest_framework.response import Response
 
-from dashboard.preferences import OVERLAY_NAMES, map_overlays, set_map_overlays
+from dashboard.preferences import OVERLAY_NAMES, THEMES, map_overlays, set_map_overlays, set_theme, theme
 from robot.api.base import robot_api_view
 from robot.api.common import error_responses
 from robot.api.validation import body_object
@@ -24,3 +24,17 @@ def map_overlays_view(request: Request) -> Response:
     if request.method == "PATCH":
         return Response(set_map_overlays(request.user, body_object(request)))
     return Response(map_overlays(request.user))
+
+
+Theme = inline_serializer(name="Theme", fields={"theme": serializers.ChoiceField(choices=THEMES)})
+
+
+@extend_schema(methods=["GET"], responses={200: Theme}, summary="Your colour theme")
+@extend_schema(methods=["PATCH"], request=Theme, responses={200: Theme, **error_responses(400)},
+               summary="Choose your colour theme",
+               description="system follows the browser's light or dark setting; light and dark override it.")
+@robot_api_view(["GET", "PATCH"])
+def theme_view(request: Request) -> Response:
+    if request.method == "PATCH":
+        return Response({"theme": set_theme(request.user, body_object(request).get("theme"))})
+    return Response({"theme": theme(request.user)})

@@ -3,6 +3,7 @@
 import { initAlertStrip } from "./alert-strip.js";
 import { live } from "./live.js";
 import "./shortcuts.js";
+import "./theme.js";
 
 const header = document.querySelector(".topbar");
 const pill = document.getElementById("link-pill");
