@@ -8,6 +8,7 @@ or of some pages at one width:  .venv/bin/python scripts/screenshots.py statemac
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import shutil
 import sys
@@ -22,6 +23,7 @@ from tests.stack import Stack  # noqa: E402
 OUT = ROOT / "docs" / "screenshots"
 CHROMIUM = os.environ.get("CHROMIUM_PATH") or shutil.which("chromium") or "/usr/bin/chromium"
 WIDTHS = {"desktop": {"width": 1366, "height": 800}, "phone": {"width": 390, "height": 844}}
+THEMES = ("light", "dark")  # the browser's colour scheme; the pages follow it
 # page name -> (path, what must be on screen before the picture is taken)
 PAGES = {
     "dashboard": ("/", '[data-field="battery.percent"]:text-matches("%")'),
@@ -54,6 +56,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description="Screenshots of the pages into docs/screenshots/.")
     parser.add_argument("pages", nargs="*", help="page names (default: every page)")
     parser.add_argument("--width", choices=list(WIDTHS), action="append", help="default: every width")
+    parser.add_argument("--theme", choices=THEMES, action="append",
+                        help="default: both (the dark ones as NAME-WIDTH-dark.png)")
     args = parser.parse_args()
     unknown = set(args.pages) - set(PAGES)
     if unknown:
@@ -66,11 +70,12 @@ def main() -> None:
     with Stack() as stack, sync_playwright() as p:
         stack.wait_robot_online()
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--headless=new", "--no-sandbox", "--disable-gpu"])
-        for width_name, viewport in WIDTHS.items():
-            if args.width and width_name not in args.width:
+        for (width_name, viewport), theme in itertools.product(WIDTHS.items(), THEMES):
+            if (args.width and width_name not in args.width) or (args.theme and theme not in args.theme):
                 continue
             phone = width_name == "phone"
-            context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1)
+            context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone, device_scale_factor=1,
+                                          color_scheme=theme)
             page = context.new_page()
             login(page, stack, "ada")
             pages = {n: PAGES[n] for n in args.pages} if args.pages else with_unlisted(page, PAGES)
@@ -78,7 +83,7 @@ def main() -> None:
                 page.goto(f"{stack.url}{path}")
                 page.wait_for_selector(ready, timeout=20_000)
                 page.wait_for_timeout(1500)  # let live values arrive
-                target = OUT / f"{name}-{width_name}.png"
+                target = OUT / f"{name}-{width_name}{'-dark' if theme == 'dark' else ''}.png"
                 page.screenshot(path=str(target), full_page=False)
                 print(target.relative_to(ROOT))
             context.close()
