@@ -31,7 +31,7 @@ def test_it_shows_the_plots_page_with_presets_to_viewers(viewer):
     assert config["presets"]["battery"]["topic"] == ri.topic("battery_soc").name
     assert config["presets"]["pad"]["fields"] == ["current_pleasure", "current_arousal", "current_dominance"]
     assert config["topics"] == [{"topic": ri.topic("battery_soc").name, "msg_type": "std_msgs/Float32",
-                                 "fields": ["data"], "text": False}]
+                                 "fields": ["data"], "text": False, "units": {"data": {"unit": "%", "scale": 100.0}}}]
 
 
 def test_it_links_admins_to_the_policies(admin_user):
