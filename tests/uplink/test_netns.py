@@ -144,8 +144,9 @@ async def _drive(world: World, seconds: float, during=None) -> None:
     """A driver's page holding a key (input every 50 ms throughout); ``during`` runs once the robot moves."""
     client = world.client("otto")
     before = len(await asyncio.to_thread(world.received))
+    # (close_timeout: with the robot away, the server takes its time answering a page's close)
     async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
-                       additional_headers={"Cookie": client.cookie}) as ws:
+                       additional_headers={"Cookie": client.cookie}, close_timeout=1) as ws:
         end = time.monotonic() + seconds
 
         async def hold() -> None:
