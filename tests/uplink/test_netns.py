@@ -215,6 +215,16 @@ def test_the_agent_and_the_server_restarting_are_survived(world: World) -> None:
     wait_until(lambda: len(world.received("/cyborg_audio/text_to_speech")) > before, timeout=5, what="a command")
 
 
+def test_a_map_goal_reaches_the_robot_and_its_status_comes_back(world: World) -> None:
+    status, goal = world.client("otto").post("/api/navigation/goal/", {"x": 1.0, "y": -2.0, "yaw": 0.0})
+    assert status == 200, goal
+    wait_until(lambda: any(m["msg"]["goal_id"]["id"] == goal["id"] for m in world.received("/move_base/goal")),
+               timeout=5, what="the goal at the robot")
+    wait_until(lambda: world.client("otto").get("/api/navigation/status/")[1]["goal"]["status"] in ("active",
+               "succeeded"), timeout=10, interval=0.1, what="the robot's goal status, told through the uplink")
+    assert world.client("otto").post("/api/navigation/cancel/", {})[0] == 200
+
+
 def _open(world: World, path: str) -> urllib.request.Request:
     return urllib.request.Request(f"{world.stack.url}{path}", headers={"Cookie": world.client("vera").cookie})
 
