@@ -35,8 +35,10 @@ READ_TIMEOUT_S = 10.0
 
 
 class CameraRecorder:
-    def __init__(self, *, writer: Callable[[Sequence[Frame]], int] = write_frames, fps: float | None = None) -> None:
+    def __init__(self, *, writer: Callable[[Sequence[Frame]], int] = write_frames, fps: float | None = None,
+                 robot_connected: Callable[[], bool] = lambda: True) -> None:
         self.writer = writer
+        self.robot_connected = robot_connected  # no robot, no camera to read: nothing is asked of it
         self.fps = settings.CAMERA_RECORD_FPS if fps is None else fps
         self.keep_s = settings.INCIDENT_BEFORE_S + 5.0
         # [t, jpeg, kept]: kept once the frame is on its way to storage.
@@ -108,13 +110,14 @@ class CameraRecorder:
     async def _pump_forever(self) -> None:
         failures = FailureLog("reading the camera for recording")
         while True:
-            try:
-                await self._pump()
-                failures.ok()
-            except asyncio.CancelledError:
-                raise
-            except (aiohttp.ClientError, TimeoutError, ValueError, OSError):
-                failures.failed()
+            if self.robot_connected():
+                try:
+                    await self._pump()
+                    failures.ok()
+                except asyncio.CancelledError:
+                    raise
+                except (aiohttp.ClientError, TimeoutError, ValueError, OSError) as exc:
+                    failures.failed(reason=str(exc) or type(exc).__name__)
             await asyncio.sleep(RECONNECT_S)
 
     async def _pump(self) -> None:
@@ -143,7 +146,7 @@ current: CameraRecorder | None = None
 async def run_camera_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
     global current
-    camera = CameraRecorder()
+    camera = CameraRecorder(robot_connected=lambda: bool(link.connected))
     if camera.fps <= 0:
         await asyncio.Event().wait()  # recording is off: idle until cancelled
     current = camera

@@ -15,6 +15,7 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 
 from cyborg_site.roles import is_admin, is_operator
+from cyborg_site.text import clean_text
 from history import replay
 from history.access import refused_topics
 from history.frames import frame_file
@@ -22,6 +23,7 @@ from history.incidents import incident_open, incident_release, incident_thumbnai
 from history.mcapexport import incident_mcap
 from history.models import CameraFrame, Incident
 from robot import interface as ri
+from robot.api.validation import body_object, reject_unknown
 
 OBJECT = OpenApiTypes.OBJECT
 T_PARAM = OpenApiParameter("t", float, description="The moment, in epoch seconds.")
@@ -107,7 +109,9 @@ def incidents_view(request: Request) -> Response:
     if request.method == "POST":
         if not is_operator(request.user):
             raise exceptions.PermissionDenied("Only operators may mark a moment.")
-        note = str(request.data.get("note") or "marked moment")[:300]
+        body = body_object(request)
+        reject_unknown(body, ["note"])
+        note = clean_text(body.get("note", ""), field="note", limit=300, allow_empty=True) or "marked moment"
         incident = incident_open(kind=Incident.Kind.MANUAL, t=time.time(), summary=note,
                                  by=request.user.get_username())
         return Response(incident_out(incident), status=status.HTTP_201_CREATED)

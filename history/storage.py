@@ -53,9 +53,13 @@ class FailureLog:
             log.warning("history: %s works again", self.what)
             self.failing = False
 
-    def failed(self) -> None:
+    def failed(self, reason: str = "") -> None:
+        """Log the failure being handled (a reason: one line, for a failure that needs no traceback)."""
         if not self.failing:
-            log.exception("history: %s failed; retrying quietly until it works", self.what)
+            if reason:
+                log.warning("history: %s failed (%s); retrying quietly until it works", self.what, reason)
+            else:
+                log.exception("history: %s failed; retrying quietly until it works", self.what)
             self.failing = True
 
 
