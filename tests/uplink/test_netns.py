@@ -225,6 +225,35 @@ def test_a_map_goal_reaches_the_robot_and_its_status_comes_back(world: World) ->
     assert world.client("otto").post("/api/navigation/cancel/", {})[0] == 200
 
 
+async def _listen_and_talk(world: World) -> int:
+    """The robot's microphone heard and the operator's voice sent, over one audio socket; the chunks heard."""
+    heard = 0
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/audio/", origin=world.stack.url,
+                       additional_headers={"Cookie": world.client("otto").cookie}, close_timeout=1) as ws:
+        await ws.send(json.dumps({"type": "listen", "on": True}))
+        while heard < 10:
+            frame = await asyncio.wait_for(ws.recv(), 10)
+            heard += isinstance(frame, bytes) and len(frame) == 640
+        await ws.send(json.dumps({"type": "listen", "on": False}))
+        await ws.send(json.dumps({"type": "talk", "on": True, "format": "S16LE", "rate": 16000, "channels": 1}))
+        while True:
+            frame = await asyncio.wait_for(ws.recv(), 10)
+            if isinstance(frame, str) and json.loads(frame).get("type") == "talking":
+                break
+        for _ in range(20):
+            await ws.send(b"\x00\x10" * 320)  # 20 ms of a quiet hum
+            await asyncio.sleep(0.02)
+        await ws.send(json.dumps({"type": "talk", "on": False}))
+    return heard
+
+
+def test_listen_and_talk_go_through_the_uplink(world: World) -> None:
+    before = len(world.received("/cyborg_audio/speaker"))
+    assert asyncio.run(_listen_and_talk(world)) >= 10
+    wait_until(lambda: len(world.received("/cyborg_audio/speaker")) >= before + 20, timeout=5,
+               what="the operator's voice at the robot's speaker")
+
+
 def _open(world: World, path: str) -> urllib.request.Request:
     return urllib.request.Request(f"{world.stack.url}{path}", headers={"Cookie": world.client("vera").cookie})
 
