@@ -53,3 +53,12 @@ def unit_of(topic: str, field: str) -> Unit | None:
 def units_of(topic: str, fields: list[str]) -> dict[str, Unit]:
     """The fields of ``topic`` whose unit is known."""
     return {f: u for f in fields if (u := unit_of(topic, f)) is not None}
+
+
+def unit_rules() -> dict[str, object]:
+    """The same table for a page that plots any topic live (the Topics page applies it, static/js/plotaxes.js)."""
+    names = {t.key: t.name for t in ri.topics()}
+    topics: dict[str, dict[str, Unit]] = {}
+    for (key, field), (unit, scale) in _BY_TOPIC.items():
+        topics.setdefault(names[key], {})[field] = {"unit": unit, "scale": scale}
+    return {"topics": topics, "paths": [[pattern.pattern, unit] for pattern, unit in _BY_PATH]}

@@ -8,6 +8,7 @@ from django.shortcuts import render
 from django.urls import reverse
 
 from history.models import Mode
+from history.plotunits import unit_rules
 
 # A person reads a message view at most this often; the plot takes every update the server sends.
 VIEW_RATE_HZ = 4.0
@@ -18,6 +19,7 @@ def topics_page(request: HttpRequest) -> HttpResponse:
         "view_rate_hz": VIEW_RATE_HZ,
         "echo_rate_hz": settings.TOPICS_ECHO_MAX_HZ,
         "record_mode": Mode.EVERY,
+        "units": unit_rules(),
         "urls": {
             "topics": reverse("api-topics"),
             "rate": reverse("api-topics-rate"),

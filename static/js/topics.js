@@ -6,7 +6,7 @@
 import { attempt, getJSON, notify, request } from "./api.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
-import { timeTicks, valueLabel } from "./plotaxes.js";
+import { fieldsLabel, timeTicks, unitOf } from "./plotaxes.js";
 import { formatTime, zone, zoneLabel } from "./time.js";
 
 const config = readConfig("topics-config");
@@ -232,24 +232,35 @@ function togglePlot(path) {
 function addPoint(frame) {
   if (xs.length && frame.t <= xs[xs.length - 1]) return;
   xs.push(frame.t);
-  fields.forEach((path, i) => ys[i].push(valueAt(frame.msg, path)));
+  fields.forEach((path, i) => {
+    const value = valueAt(frame.msg, path);
+    ys[i].push(value == null ? null : value * (fieldUnit(path)?.scale ?? 1)); // battery in %, as labelled
+  });
   if (xs.length > MAX_POINTS) { xs.shift(); for (const y of ys) y.shift(); }
   if (!plotTimer) plotTimer = setTimeout(() => { plotTimer = null; plot?.setData([xs, ...ys]); }, PLOT_REDRAW_MS);
 }
+
+const fieldUnit = (path) => unitOf(config.units, current?.name, path.join("."));
 
 function buildPlot() {
   plot?.destroy();
   const el = $("topic-plot");
   el.hidden = false;
   $("topic-plot-head").hidden = false;
-  $("topic-plot-fields").textContent = fields.map((f) => f.join(".")).join(", ");
+  $("topic-plot-fields").textContent = fields.map((f) => {
+    const unit = fieldUnit(f)?.unit;
+    return unit ? `${f.join(".")} (${unit})` : f.join(".");
+  }).join(", ");
   plot = new uPlot({
     width: el.clientWidth || 600, height: 220,
     scales: { x: { time: true } },
     tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), zone),
     axes: [{ label: `time (${zone}, ${zoneLabel()})`, values: timeTicks, space: 70 },
-      { label: valueLabel(fields.map((f) => f.join(".")), "") }],
-    series: [{ value: (u, v) => (v == null ? "—" : formatTime(v, { label: true })) }, ...fields.map((f, i) => ({ label: f.join("."), stroke: COLOURS[i % COLOURS.length], width: 1.5, spanGaps: true }))],
+      { label: fieldsLabel(fields.map((f) => f.join(".")), fields.map(fieldUnit)) }],
+    series: [{ value: (u, v) => (v == null ? "—" : formatTime(v, { label: true })) }, ...fields.map((f, i) => ({
+      label: f.join("."), stroke: COLOURS[i % COLOURS.length], width: 1.5, spanGaps: true,
+      value: (u, v) => (v == null ? "—" : `${+v.toFixed(3)} ${fieldUnit(f)?.unit ?? ""}`.trim()),
+    }))],
     legend: { live: true },
   }, [xs, ...ys], el);
 }

@@ -58,8 +58,16 @@ def test_clicking_a_number_plots_it_live(stack, page):
         page.locator("#topic-message summary", has=page.locator(".key", has_text=part)).first.click()
     page.locator("#topic-message .row", has=page.locator(".key", has_text="secs")).locator(".num").first.click()
     expect(page.locator("#topic-plot canvas").first).to_be_visible()
-    expect(page.locator("#topic-plot-fields")).to_contain_text("header.stamp.secs")
+    expect(page.locator("#topic-plot-fields")).to_have_text("header.stamp.secs (s)")  # with its unit
     page.wait_for_function(f"({SERIES_PIXELS})() > 20", timeout=15_000)
+    # The server's unit table, as the plot applies it: battery in % (scaled), speeds in m/s, unknown none.
+    units = page.evaluate("""async () => {
+        const { unitOf } = await import('/static/js/plotaxes.js');
+        const rules = JSON.parse(document.getElementById('topics-config').textContent).units;
+        return [unitOf(rules, '/RosAria/battery_state_of_charge', 'data'),
+                unitOf(rules, '/odom', 'twist.twist.linear.x'), unitOf(rules, '/odom', 'child_frame_id')];
+    }""")
+    assert units == [{"unit": "%", "scale": 100}, {"unit": "m/s", "scale": 1}, None], units
 
 
 UNKNOWN = "/no_such_topic_here"
