@@ -244,20 +244,25 @@ def sim():
         yield running
 
 
-@pytest.fixture
-async def link(sim, settings):
-    """The robot link hosted on the test's event loop, connected to ``sim`` (no background services)."""
+async def hosted_link(url: str, settings, *, timeout: float = 10):
+    """The robot link hosted on the test's event loop, connected to ``url`` (no background services)."""
     from robot.link import connection as link_module
     from robot.link.hosting import start_link
 
-    settings.ROSBRIDGE_URL = sim.url
+    settings.ROSBRIDGE_URL = url
     hosted, tasks = await start_link(embedded=True, background=False)
-    await async_wait_until(lambda: hosted.connected, timeout=10, what="link connected")
+    await async_wait_until(lambda: hosted.connected, timeout=timeout, what="link connected")
     yield hosted
     for task in tasks:
         task.cancel()
     await hosted.stop()
     link_module.current = None
+
+
+@pytest.fixture
+async def link(sim, settings):
+    async for hosted in hosted_link(sim.url, settings):
+        yield hosted
 
 
 class LinkThread:

@@ -13,7 +13,8 @@ from robot.link.bus import RobotNotResponding, apublish
 from robot.link.liveness import judge
 from robot.live.groups import STATUS_KEY
 from robot.live.state import get_store, status_view
-from tests.helpers import async_wait_until, receive_until, ws_communicator
+from tests.conftest import hosted_link
+from tests.helpers import receive_until, ws_communicator
 from tests.stack import ROOT, free_port, wait_for_port
 
 
@@ -40,17 +41,8 @@ def sim_process():
 
 @pytest.fixture
 async def frozen_link(sim_process, settings):
-    from robot.link import connection as link_module
-    from robot.link.hosting import start_link
-
-    settings.ROSBRIDGE_URL = sim_process.url
-    hosted, tasks = await start_link(embedded=True, background=False)
-    await async_wait_until(lambda: hosted.connected, timeout=15, what="link connected")
-    yield hosted
-    for task in tasks:
-        task.cancel()
-    await hosted.stop()
-    link_module.current = None
+    async for hosted in hosted_link(sim_process.url, settings, timeout=15):
+        yield hosted
 
 
 async def stored_status() -> dict:
