@@ -33,6 +33,9 @@ class TaskHealth:
 
 
 _tasks: dict[str, TaskHealth] = {}
+# The event loop holds its tasks only weakly: one that waits on something nobody else holds (a
+# service idling on an event of its own) would be collected mid-run, its caller having let go.
+_running: set[asyncio.Task] = set()
 
 
 def supervise(
@@ -79,6 +82,8 @@ def supervise(
 
     task = asyncio.ensure_future(run())
     task.set_name(name)  # named where a stop reports it still running
+    _running.add(task)
+    task.add_done_callback(_running.discard)
     return task
 
 

@@ -2,6 +2,7 @@
 backoff, its state feeds health, cancellation stops it, a transient task leaves health."""
 
 import asyncio
+import gc
 import itertools
 import logging
 
@@ -93,3 +94,24 @@ async def test_cancel_and_wait_waits_no_longer_than_told_and_names_what_still_ru
     await asyncio.wait({slow}, timeout=2)
     assert slow.cancelled()
     supervisor.forget("test.slow-to-end")
+
+
+async def test_a_task_that_waits_on_what_nobody_holds_is_not_collected_mid_run():
+    ended = asyncio.Event()
+
+    async def idle() -> None:
+        try:
+            await asyncio.get_running_loop().create_future()  # held by nothing but this frame
+        finally:
+            ended.set()
+
+    supervisor.supervise("test.idle", idle)  # the caller lets go of the task at once
+    await asyncio.sleep(0)
+    gc.collect()
+    await asyncio.sleep(0.05)
+    assert not ended.is_set()
+    assert supervisor.health()["test.idle"]["state"] == "running"
+    for task in list(supervisor._running):
+        if task.get_name() == "test.idle":
+            task.cancel()
+    await asyncio.wait_for(ended.wait(), 1)
