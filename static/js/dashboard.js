@@ -145,7 +145,7 @@ document.getElementById("log-clear").addEventListener("click", () => {
 // --- connection card and ages ----------------------------------------------------------
 // The robot dials in (UPLINK): from where and since when, or what is missing.
 function uplinkText(u) {
-  const at = (t) => new Date(t * 1000).toLocaleString();
+  const at = (t) => formatTime(t, { label: true });
   if (u.connected) return `robot connected through its uplink from ${u.address} since ${at(u.since)}`;
   if (u.last_address) return `no uplink from the robot: the last, from ${u.last_address}, ended ${at(u.ended)} (${u.why || "closed"})`;
   return u.why || "no uplink from the robot yet: is its uplink agent running?";

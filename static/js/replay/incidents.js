@@ -1,10 +1,11 @@
-// The incidents page: mark this moment (operators), release an incident to retention (admins), local times.
+// The incidents page: mark this moment (operators), release an incident to retention (admins), times in the site's zone.
 import { notify, request } from "../api.js";
+import { formatTime } from "../time.js";
 
 const urls = JSON.parse(document.getElementById("incidents-urls").textContent);
 
 for (const el of document.querySelectorAll("time[data-epoch]")) {
-  el.textContent = new Date(Number(el.dataset.epoch) * 1000).toLocaleString(undefined, { hour12: false });
+  el.textContent = formatTime(Number(el.dataset.epoch), { label: true });
 }
 
 const form = document.getElementById("mark-form");

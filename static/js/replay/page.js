@@ -1,6 +1,7 @@
 // The replay page: seek (the state at t plus the window after it), then play through the window
 // at the chosen speed, fetching the next window before this one runs out. Nothing here commands the robot.
 import { request } from "../api.js";
+import { formatTime, parseSiteTime } from "../time.js";
 import { drawMap } from "./map.js";
 import { Timeline } from "./timeline.js";
 
@@ -16,9 +17,9 @@ let timeline = null, seeking = null, extending = null, playing = false, lastTick
 // Read by the browser tests and bench/replay.py: renders, and the seeks that reached the page.
 window.replayStats = { renders: 0, seeks: 0, frames: 0, t: 0 };
 
-const fmt = (s) => new Date(s * 1000).toLocaleString(undefined, { hour12: false });
-const clock = (s) => new Date(s * 1000).toLocaleTimeString(undefined, { hour12: false });
-const localInput = (s) => { const d = new Date(s * 1000 - new Date(s * 1000).getTimezoneOffset() * 60000); return d.toISOString().slice(0, 19); };
+const fmt = (s) => formatTime(s, { label: true });
+const clock = (s) => formatTime(s, { date: false });
+const siteInput = (s) => formatTime(s);
 
 function text(id, value) { const el = $(id); if (el.textContent !== value) el.textContent = value; }
 
@@ -133,11 +134,11 @@ for (const i of config.incidents) {
 incidentSelect.addEventListener("change", () => {
   if (incidentSelect.value) window.location.search = `?incident=${incidentSelect.value}`;
 });
-$("range-start").value = localInput(range.start);
-$("range-end").value = localInput(range.end);
+$("range-start").value = siteInput(range.start);
+$("range-end").value = siteInput(range.end);
 $("replay-range").addEventListener("submit", (event) => {
   event.preventDefault();
-  const start = new Date($("range-start").value).getTime() / 1000, end = new Date($("range-end").value).getTime() / 1000;
+  const start = parseSiteTime($("range-start").value), end = parseSiteTime($("range-end").value);
   if (!(end > start)) { text("replay-status", "To must come after From"); return; }
   range = { start, end };
   setPlaying(false);
