@@ -41,8 +41,11 @@ function onUpdate(frame) {
 live.watch(config.keys, onUpdate);
 live.onStatus((status) => {
   const online = !!status.connected;
-  if (online === robotOnline) return;
+  // Connected but silent (hung, frozen): "not responding", driving refused until it answers.
+  const hung = !!status.robot_connected && status.responding === false;
+  if (online === robotOnline && hung === robotHung) return;
   robotOnline = online;
+  robotHung = hung;
   if (!online && sending) stopInput("release");
   renderLock();
 });
@@ -122,6 +125,7 @@ setInterval(watchFrames, 250);
 const lock = { holder: null, you: false };
 let estop = null; // the E-STOP message while it is latched: no input is sent
 let robotOnline = false;
+let robotHung = false;
 let ws = null;
 let wsDelay = 500;
 let lastError = { message: "", at: 0 };
@@ -150,6 +154,9 @@ function renderLock() {
   card.classList.toggle("locked-out", !lock.you && !!lock.holder);
   card.classList.toggle("robot-offline", !robotOnline);
   $("drive-offline").hidden = robotOnline;
+  $("drive-offline").textContent = robotHung
+    ? "The robot is not responding: driving is disabled until it answers."
+    : "The robot is offline: driving is disabled until it is back.";
   const show = (id, on) => { const b = $(id); if (b) b.hidden = !on; };
   show("lock-acquire", canDrive && robotOnline && !estop && !lock.you && !lock.holder);
   show("lock-release", lock.you);

@@ -113,6 +113,9 @@ def test_every_kind_of_alert_shows_on_drive_and_map_at_once(browser, low_stack):
             assert time.monotonic() - frozen < 3.5
             for page in pages:
                 expect(alert(page, "not_responding")).to_contain_text("not responding")
+            # Drive offers no control of a robot that does not answer, and says why.
+            expect(drive.locator("#drive-offline")).to_contain_text("not responding")
+            expect(drive.locator("#lock-acquire")).to_be_hidden()
         finally:
             os.kill(low_stack.sim_proc.pid, signal.SIGCONT)
         for page in pages:
