@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from typing import Any
 
 
@@ -67,3 +68,10 @@ def ws_communicator(user, path: str = "/ws/live/"):
     if user is not None:
         communicator.scope["user"] = user
     return communicator
+
+
+def run_coroutine[T](coro: Coroutine[Any, Any, T]) -> T:
+    """``asyncio.run`` on a thread of its own: a test may share its thread with Playwright's sync API,
+    whose event loop runs there for as long as the session's browser lives."""
+    with concurrent.futures.ThreadPoolExecutor(1) as thread:
+        return thread.submit(asyncio.run, coro).result()

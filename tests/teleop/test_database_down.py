@@ -63,7 +63,8 @@ def test_the_estop_works_and_nothing_else_reaches_the_robot_while_the_database_i
         status, body = page.get("/api/audit/?limit=100")
         rows[:] = [(r["username"], r["action"], r["ok"], r["error_code"], r["address"])
                    for r in reversed(body.get("results", []))
-                   if not r["action"].startswith(("account.", "token.", "setting."))]  # the stack's set-up (accounts, tokens, default recording policies)
+                   # the stack's set-up: accounts, tokens, default recording policies
+                   if not r["action"].startswith(("account.", "token.", "setting."))]
         return status == 200 and len(rows) == 7
 
     wait_until(audited, timeout=20, what="the journaled audit entries")

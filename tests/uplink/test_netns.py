@@ -18,7 +18,7 @@ import pytest
 from django.conf import settings
 from websockets.asyncio.client import connect
 
-from tests.helpers import wait_until
+from tests.helpers import run_coroutine, wait_until
 from tests.stack import PYTHON, Stack, free_port
 from tests.support_processes import Client, PrivateRedis
 from tests.uplink.netns import Front, RobotSide, TestCA
@@ -175,12 +175,12 @@ def test_driving_reaches_the_robot_and_a_dropped_uplink_stops_it_from_the_agent(
         dropped.append(time.time())
         world.agent.wait_log("stopping the robot: the uplink dropped", after=logged)
 
-    asyncio.run(_drive(world, 1.0, during=drop))
+    run_coroutine(_drive(world, 1.0, during=drop))
     after = [m for m in world.received() if m["t"] > dropped[0]]
     assert after and not _moving(after[-1]), "the robot was left moving"
     world.front.start()
     world.wait_online()
-    asyncio.run(_drive(world, 0.5))  # driving works again, nobody restarted anything by hand
+    run_coroutine(_drive(world, 0.5))  # driving works again, nobody restarted anything by hand
 
 
 def test_the_estop_stops_the_robot_through_the_uplink_and_its_release_lets_it_drive(world: World) -> None:
@@ -193,7 +193,7 @@ def test_the_estop_stops_the_robot_through_the_uplink_and_its_release_lets_it_dr
     status, body = operator.post("/api/robot/estop/release/", {"confirm": True})
     assert status == 200, body
     assert operator.post("/api/robot/motors/", {"enabled": True})[0] == 200
-    asyncio.run(_drive(world, 0.5))
+    run_coroutine(_drive(world, 0.5))
 
 
 def test_the_agent_and_the_server_restarting_are_survived(world: World) -> None:
@@ -249,7 +249,7 @@ async def _listen_and_talk(world: World) -> int:
 
 def test_listen_and_talk_go_through_the_uplink(world: World) -> None:
     before = len(world.received("/cyborg_audio/speaker"))
-    assert asyncio.run(_listen_and_talk(world)) >= 10
+    assert run_coroutine(_listen_and_talk(world)) >= 10
     wait_until(lambda: len(world.received("/cyborg_audio/speaker")) >= before + 20, timeout=5,
                what="the operator's voice at the robot's speaker")
 
@@ -291,11 +291,11 @@ def test_a_stalled_uplink_mid_drive_gets_the_robot_a_zero_twist_from_the_agent(w
         finally:
             subprocess.run(["ip", "link", "set", world.side.host_if, "up"], check=True, timeout=10)
 
-    asyncio.run(_drive(world, 1.0, during=stall))
+    run_coroutine(_drive(world, 1.0, during=stall))
     after = [m for m in world.received() if m["t"] > stalled[0]]
     assert after and not _moving(after[0]), "a moving Twist reached the robot after the stall"
     world.wait_online(timeout=30)
-    asyncio.run(_drive(world, 0.5))
+    run_coroutine(_drive(world, 0.5))
 
 
 def test_a_revoked_credential_closes_the_live_uplink_within_a_second_and_is_refused(world: World) -> None:
