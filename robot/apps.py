@@ -11,12 +11,15 @@ class RobotConfig(AppConfig):
 
     def ready(self) -> None:
         checks.register(check_robot_settings)
+        from django.conf import settings
+
         import cyborg_site.checks  # noqa: F401  (the site's own: the secret key)
 
         # Wherever the link runs: the map renderer, the goal tracker, where the robot is,
         # the state machine graph and the diagnostics.
         from robot.introspection import tracking  # noqa: F401
         from robot.link import audio, watching
+        from robot.link.hosting import register_background
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
         from robot.overlays import link as overlays
         from robot.uplink import hosting as uplink
@@ -24,7 +27,8 @@ class RobotConfig(AppConfig):
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()
         watching.install()  # any topic a page opens: leases, echo, listing and rates
-        uplink.install()  # with UPLINK, the robot's agent connects to the process that hosts the link
+        if settings.UPLINK:  # the robot's agent connects to the process that hosts the link
+            register_background("uplink", uplink.serve_uplink)
 
         broadcast.connect()
 

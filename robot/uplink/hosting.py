@@ -48,9 +48,3 @@ def uplink_status() -> dict[str, Any] | None:
         return {"connected": False, "why": "the uplink endpoint is not running in the link's process"}
     return current.status()
 
-
-def install() -> None:
-    if settings.UPLINK:
-        from robot.link.hosting import register_background
-
-        register_background("uplink", serve_uplink)
