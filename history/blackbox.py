@@ -30,7 +30,7 @@ from django.conf import settings
 from history import camerarec, recorder
 from history.incidents import Triggers, incident_open, incidents_to_capture
 from history.models import Incident
-from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
+from history.storage import FailureLog, Pending, Row, encode, in_thread, write_batch, write_rows
 from robot import interface as ri
 from robot.live.keys import LATCH_KEY
 
@@ -128,13 +128,10 @@ class BlackBox:
         if not pending:
             return 0
         rows, _ = encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
-        try:
-            written = await in_thread(self.writer, rows)
-        except Exception:
-            self._write_log.failed()
+        written = await write_batch(self.writer, rows, self._write_log)
+        if written is None:
             self.lost += len(pending)
             return 0
-        self._write_log.ok()
         self.stored += written
         return written
 

@@ -24,7 +24,7 @@ import aiohttp
 from django.conf import settings
 
 from history.frames import Frame, write_frames
-from history.storage import FailureLog, in_thread
+from history.storage import FailureLog, write_batch
 
 log = logging.getLogger(__name__)
 
@@ -86,13 +86,10 @@ class CameraRecorder:
         pending, self._pending = self._pending, []
         if not pending:
             return 0
-        try:
-            written = await in_thread(self.writer, sorted(pending, key=lambda f: f[0]))
-        except Exception:
-            self._write_log.failed()
+        written = await write_batch(self.writer, sorted(pending, key=lambda f: f[0]), self._write_log)
+        if written is None:
             self.lost += len(pending)
             return 0
-        self._write_log.ok()
         self.stored += written
         return written
 

@@ -66,6 +66,17 @@ class FailureLog:
 IN_FLIGHT_WAIT_S = 10.0
 
 
+async def write_batch[T](writer: Callable[[T], int], batch: T, failures: FailureLog) -> int | None:
+    """``writer(batch)`` in a worker thread: the rows written, or None when it failed (logged once per outage)."""
+    try:
+        written = await in_thread(writer, batch)
+    except Exception:
+        failures.failed()
+        return None
+    failures.ok()
+    return written
+
+
 async def in_thread[T](fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
     """Run blocking database work off the event loop, in a worker thread that tidies its connection."""
 
