@@ -1,4 +1,4 @@
-"""The coverage of the safety code (E-STOP, latch, deadman, drive lock, lease), with its uncovered
+"""The coverage of the safety code (E-STOP, latch, deadman, locks, liveness, lease), with its uncovered
 lines named, from the combined data of both passes of ``make test``."""
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ SAFETY = {
     "robot/commands/gate.py": "E-STOP gate (what each command does under the latch)",
     "robot/api/estop_access.py": "E-STOP access with the database down",
     "robot/commands/audit_journal.py": "audit journal (the E-STOP's audit with the database down)",
-    "robot/teleop/lock.py": "drive lock",
+    "robot/live/locks.py": "the drive and talk locks, the mode change's (in-process and on Redis)",
+    "robot/link/liveness.py": "liveness (a robot that stops answering is sent nothing that moves it)",
     "robot/teleop/driver.py": "deadman (teleop loop)",
     "robot/teleop/driving.py": "drive sessions",
     "robot/teleop/session.py": "drive socket session",
