@@ -45,6 +45,16 @@ function keyBytes(b64) {
   return Uint8Array.from(raw, (c) => c.charCodeAt(0));
 }
 
+// The worker's scope is its folder, not this page, so navigator.serviceWorker.ready would never
+// resolve here: wait for this registration's own worker instead (push needs an active one).
+function activated(registration) {
+  const worker = registration.installing || registration.waiting || registration.active;
+  if (worker.state === "activated") return Promise.resolve(registration);
+  return new Promise((resolve) => {
+    worker.addEventListener("statechange", () => { if (worker.state === "activated") resolve(registration); });
+  });
+}
+
 document.getElementById("push-enable").addEventListener("click", async () => {
   if (!("serviceWorker" in navigator) || !("PushManager" in window)) {
     notify("This browser has no Web Push (it needs HTTPS, or localhost).", "error");
@@ -53,7 +63,7 @@ document.getElementById("push-enable").addEventListener("click", async () => {
   try {
     if (await Notification.requestPermission() !== "granted") throw new Error("Notifications are not allowed for this site.");
     const registration = await navigator.serviceWorker.register(config.worker_url);
-    await navigator.serviceWorker.ready;
+    await activated(registration);
     const subscription = await registration.pushManager.subscribe({ userVisibleOnly: true, applicationServerKey: keyBytes(publicKey) });
     await request("POST", config.push_url, subscription.toJSON());
     show(await request("GET", config.choice_url));

@@ -102,7 +102,11 @@ async def test_revoking_the_credential_closes_its_live_uplink_at_once(sim, endpo
     await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
     await sync_to_async(credential_revoke)(credential=made)
     await async_wait_until(lambda: endpoint.live is None, timeout=1, what="the revoked uplink closed")
-    gone = await _actions("uplink.disconnect")
+    gone: list = []
+    for _ in range(250):  # the audit row follows the close (the audit writer's thread)
+        if gone := await _actions("uplink.disconnect"):
+            break
+        await asyncio.sleep(0.02)
     assert len(gone) == 1 and "revoked" in gone[0].outcome
     await async_wait_until(lambda: "the server refused the uplink" in agent.log(), timeout=5, what="a refusal")
     assert endpoint.live is None
