@@ -8,6 +8,7 @@ import subprocess
 
 import pytest
 
+from tests.deploy.test_units import exposure
 from tests.stack import ROOT
 from uplink_agent.__main__ import settings_from_env
 
@@ -45,3 +46,4 @@ def test_systemd_analyze_rates_the_unit_ok(tmp_path) -> None:
     run = subprocess.run(["systemd-analyze", "verify", str(unit)], capture_output=True, text=True, timeout=60)
     problems = [line for line in run.stderr.splitlines() if "cyborg-uplink.service" in line]
     assert not problems, run.stderr
+    assert exposure(unit) <= 2.0
