@@ -11,10 +11,6 @@ from dashboard.routing import AUDIO_SOCKET_PATH
 from robot import interface as ri
 from robot.live.keys import HOME_KEYS
 
-# An error from the robot log stays on the dashboard's alert strip this long unless dismissed.
-ALERT_TTL_S = 600
-
-
 def audio_config() -> dict[str, str]:
     """What the audio card (static/js/audio.js) needs, on every page that shows it."""
     return {"audio_socket": AUDIO_SOCKET_PATH, "audio_worklet": static("js/audio-capture.js")}
@@ -29,7 +25,6 @@ def dashboard_context() -> dict[str, Any]:
             "log_levels": ri.LOG_LEVELS,
             "recharge_states": ri.RECHARGE_STATES,
             "rosbridge_url": settings.ROSBRIDGE_URL,
-            "alert_ttl_s": ALERT_TTL_S,
             **audio_config(),
         },
     }

@@ -9,7 +9,6 @@ trail and goal, the log lines and commands (with who) before it, and its camera 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from functools import lru_cache
 from pathlib import Path
@@ -204,12 +203,15 @@ def span() -> dict[str, float | None]:
     return {"first": min(firsts) if firsts else None, "last": max(lasts) if lasts else None}
 
 
+LAST_MOMENT_S = 253_402_300_799.0  # 9999-12-31 23:59:59 UTC, the last a datetime holds
+
+
 def parse_time(text: str | None) -> float | None:
     try:
         value = float(text or "")
     except ValueError:
         return None
-    return value if math.isfinite(value) and value > 0 else None
+    return value if 0 < value <= LAST_MOMENT_S else None
 
 
 DEFAULT_RANGE_S = 600.0

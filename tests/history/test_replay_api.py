@@ -104,6 +104,8 @@ def test_a_sensitive_topic_is_left_out_for_a_viewer_but_not_an_operator(viewer_a
 
 def test_a_bad_moment_is_refused(viewer_api, db):
     assert viewer_api.get("/api/history/replay/state/", {"t": "soon"}).status_code == 400
+    for beyond in ("6.8e16", "1e400", "NaN", "-5"):  # past any date a datetime holds, not a number, before 1970
+        assert viewer_api.get("/api/history/replay/state/", {"t": beyond}).status_code == 400, beyond
     assert viewer_api.get("/api/history/replay/window/", {"start": 10, "end": 5}).status_code == 400
 
 
