@@ -99,22 +99,49 @@ class TestCA:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
+def _site() -> str:
+    return (ROOT / "deploy" / "nginx" / "cyborg.conf").read_text()
+
+
+def site_location(path: str) -> str:
+    """The shipped site's ``location PATH { … }`` block, as it is."""
+    found = re.search(rf"\n    location {re.escape(path)} \{{.*?\n    \}}\n", _site(), re.S)
+    assert found, f"deploy/nginx/cyborg.conf has no location {path}"
+    return found.group(0)
+
+
 def uplink_location() -> str:
-    """The shipped site's ``/uplink/`` location, as it is."""
-    site = (ROOT / "deploy" / "nginx" / "cyborg.conf").read_text()
-    found = re.search(r"\n    location = /uplink/ \{.*?\n    \}\n", site, re.S)
-    assert found, "deploy/nginx/cyborg.conf has no /uplink/ location"
-    return found.group(0).replace("limit_req zone=cyborg_login burst=5 nodelay;", "")
+    """The shipped site's ``/uplink/`` location, as it is (but for its per-address limit)."""
+    return site_location("= /uplink/").replace("limit_req zone=cyborg_login burst=5 nodelay;", "")
+
+
+def web_locations(web_port: int) -> tuple[str, str]:
+    """The shipped site's limits (for the http block) and its locations for the pages and their sockets
+    (for the server), to ``web_port``."""
+    site = _site()
+    zones = "\n".join(line for line in site.splitlines() if line.startswith(("limit_req_zone", "limit_conn_zone")))
+    return (f"{zones}\nupstream cyborg_web {{ server 127.0.0.1:{web_port} max_fails=0; }}\n",
+            "limit_req_status 429; limit_conn_status 429; client_max_body_size 20m;\n"
+            + site_location("/ws/") + site_location("/"))
 
 
 class Front:
-    """nginx on ``ip``:``port`` with TLS, ``/uplink/`` to ``uplink_port``."""
+    """nginx on ``ip``:``port`` with TLS, ``/uplink/`` to ``uplink_port``; with ``web_port``, also the
+    site's pages and sockets to that Daphne, and the same server on 127.0.0.1:``port`` for a browser
+    here (``web_url``; the stack needs ``web_env()``)."""
 
-    def __init__(self, *, ip: str, port: int, uplink_port: int, ca: TestCA) -> None:
+    def __init__(self, *, ip: str, port: int, uplink_port: int, ca: TestCA, web_port: int | None = None) -> None:
         self.dir = Path(tempfile.mkdtemp(prefix="cyborg-uplink-nginx-"))
         self.ip, self.port = ip, port
+        http_extra, server_extra, listen_extra = "", "", ""
+        if web_port is not None:
+            http_extra, server_extra = web_locations(web_port)
+            listen_extra = f"listen 127.0.0.1:{port} ssl;"
+        # (as root, nginx's worker would run as nobody: it could not use the temporary folders here)
+        user = "user root;" if os.geteuid() == 0 else ""
         (self.dir / "nginx.conf").write_text(f"""
 daemon off;
+{user}
 worker_processes 1;
 pid {self.dir}/nginx.pid;
 error_log {self.dir}/error.log warn;
@@ -125,15 +152,26 @@ http {{
     fastcgi_temp_path {self.dir}; uwsgi_temp_path {self.dir}; scgi_temp_path {self.dir};
     map $http_upgrade $cyborg_connection {{ default upgrade; "" ""; }}
     upstream cyborg_uplink {{ server 127.0.0.1:{uplink_port} max_fails=0; }}
+    {http_extra}
     server {{
         listen {ip}:{port} ssl;
+        {listen_extra}
         ssl_certificate {ca.cert};
         ssl_certificate_key {ca.key};
         {uplink_location()}
+        {server_extra}
     }}
 }}
 """)
         self.proc: subprocess.Popen | None = None
+
+    @property
+    def web_url(self) -> str:
+        return f"https://127.0.0.1:{self.port}"
+
+    def web_env(self) -> dict[str, str]:
+        """What the server needs behind this nginx: its origin trusted, and TLS as nginx says."""
+        return {"CSRF_TRUSTED_ORIGINS": self.web_url, "SECURE_PROXY_SSL_HEADER": "HTTP_X_FORWARDED_PROTO,https"}
 
     def start(self) -> Front:
         nginx = shutil.which("nginx") or "/usr/sbin/nginx"

@@ -7,19 +7,22 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
 import socket
 import subprocess
 import time
 import urllib.request
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import pytest
 from django.conf import settings
+from playwright.sync_api import Browser, Page, expect
 from websockets.asyncio.client import connect
+from websockets.typing import Origin
 
 from tests.helpers import run_coroutine, wait_until
-from tests.stack import PYTHON, Stack, free_port
+from tests.stack import PASSWORD, PYTHON, Stack, free_port
 from tests.support_processes import Client, PrivateRedis
 from tests.uplink.netns import Front, RobotSide, TestCA
 from tests.uplink.support import Agent
@@ -94,7 +97,10 @@ def world() -> Iterator[World]:
         "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(relay_video_port),
         "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{relay_video_port}",
         "TRUSTED_PROXIES": "127.0.0.1", "TELEOP_LOCK_TTL_S": "1", "CAMERA_RECORD_FPS": "0"})
-    front = agent = None
+    # The browsers' way in too: the same nginx carries the site's pages and sockets (TLS, the test CA).
+    front = Front(ip=side.host_ip, port=free_port(), uplink_port=uplink_port, ca=ca, web_port=stack.web_port)
+    stack.env.update(front.web_env())
+    agent = None
     sim = None
     try:
         stack.start()
@@ -104,7 +110,7 @@ def world() -> Iterator[World]:
         # The boundary holds: nothing of the robot's is reachable from the server's side.
         assert _unreachable(side.robot_ip, sim_port) and _unreachable(side.robot_ip, video_port)
         assert _unreachable("127.0.0.1", sim_port) and _unreachable("127.0.0.1", video_port)
-        front = Front(ip=side.host_ip, port=free_port(), uplink_port=uplink_port, ca=ca).start()
+        front.start()
         world = World(side, stack, front, None, sim_port, video_port)  # type: ignore[arg-type]
         agent = world.agent = Agent(
             server_url=f"wss://{side.host_ip}:{front.port}/uplink/", credential=world.credential(),
@@ -116,8 +122,7 @@ def world() -> Iterator[World]:
     finally:
         if agent is not None:
             agent.__exit__()
-        if front is not None:
-            front.stop()
+        front.stop()
         if sim is not None:
             os.killpg(sim.pid, 15)
             sim.wait(10)
@@ -140,12 +145,66 @@ def test_the_dashboard_shows_the_robot_through_its_uplink_and_a_command_reaches_
     assert world.received("/cyborg_audio/text_to_speech")[-1]["msg"]["data"] == "hello through the uplink"
 
 
-async def _drive(world: World, seconds: float, during=None) -> None:
+def _pose(page: Page) -> tuple[float, float]:
+    x, y = page.locator("#pose").evaluate("el => [el.dataset.x, el.dataset.y]")
+    return float(x), float(y)
+
+
+def test_a_browser_through_nginx_sees_the_robot_live_through_its_uplink_and_drives_it_with_the_keyboard(
+        world: World, browser: Browser) -> None:
+    """Headless Chromium over TLS through the same nginx the robot dials: the dashboard says where the
+    robot is connected from, and the drive page's keys reach the robot's /cmd_vel in the namespace."""
+    context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
+    page = context.new_page()
+    page.set_default_timeout(15_000)
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    site = world.front.web_url
+    try:
+        page.goto(f"{site}/accounts/login/?next=/")
+        page.fill("input[name=username]", "olga")
+        page.fill("input[name=password]", PASSWORD)
+        page.click("button[type=submit]")
+        page.wait_for_url(f"{site}/")
+        expect(page.locator('[data-field="link.state"]')).to_have_text("Online")
+        expect(page.locator('[data-field="link.url"]')).to_have_text(
+            re.compile(f"^robot connected through its uplink from {re.escape(world.side.robot_ip)} since "))
+
+        page.goto(f"{site}/drive/")
+        expect(page.locator("#motors")).to_have_text("enabled")
+        expect(page.locator("#pose")).not_to_have_attribute("data-x", "")
+        expect(page.locator("#lock-state")).to_have_text("Nobody is driving")  # (another test's lock lapsed)
+        page.click("#lock-acquire")
+        expect(page.locator("#lock-state")).to_have_text("You are driving")
+        start = _pose(page)
+        pressed = time.time()
+        page.keyboard.down("w")
+        # The robot publishes its pose through the uplink: the page sees it move.
+        page.wait_for_function("([x, y]) => { const el = document.getElementById('pose');"
+                               " return Math.hypot(el.dataset.x - x, el.dataset.y - y) > 0.3; }",
+                               arg=list(start), timeout=10_000)
+        held = [m for m in world.received() if m["t"] > pressed]
+        assert held and all(m["msg"]["linear"]["x"] > 0 for m in held), held[-5:]
+        released = time.time()
+        page.keyboard.up("w")
+        wait_until(lambda: any(not _moving(m) for m in world.received() if m["t"] > released), timeout=3,
+                   what="a zero Twist at the robot after the key's release")
+        expect(page.locator("#cmd-vel")).to_have_attribute("data-linear", "0")
+        expect(page.locator("#odom-vel")).to_have_attribute("data-linear", "0", timeout=5_000)
+        assert not _moving(world.received()[-1]), "the robot was left moving"
+        page.click("#lock-release")
+        expect(page.locator("#lock-state")).to_have_text("Nobody is driving")
+        assert errors == []
+    finally:
+        context.close()
+
+
+async def _drive(world: World, seconds: float, during: Callable[[], None] | None = None) -> None:
     """A driver's page holding a key (input every 50 ms throughout); ``during`` runs once the robot moves."""
     client = world.client("otto")
     before = len(await asyncio.to_thread(world.received))
     # (close_timeout: with the robot away, the server takes its time answering a page's close)
-    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=Origin(world.stack.url),
                        additional_headers={"Cookie": client.cookie}, close_timeout=1) as ws:
         end = time.monotonic() + seconds
 
@@ -228,7 +287,7 @@ def test_a_map_goal_reaches_the_robot_and_its_status_comes_back(world: World) ->
 async def _listen_and_talk(world: World) -> int:
     """The robot's microphone heard and the operator's voice sent, over one audio socket; the chunks heard."""
     heard = 0
-    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/audio/", origin=world.stack.url,
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/audio/", origin=Origin(world.stack.url),
                        additional_headers={"Cookie": world.client("otto").cookie}, close_timeout=1) as ws:
         await ws.send(json.dumps({"type": "listen", "on": True}))
         while heard < 10:
