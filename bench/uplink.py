@@ -3,8 +3,13 @@
 The simulator and the uplink agent (on the oldest Python here) run in a network namespace the
 server cannot reach; the agent dials nginx (TLS, a test CA) through a latency relay of our own
 (40 ms each way, 10 ms jitter; no kernel netem on this machine) and the server (Daphne, embedded
-link) drives the robot through it. Receive times are the simulator's wall clock (same machine).
-Needs root (ip netns). Usage: ``.venv/bin/python bench/uplink.py``. Prints ``name: value`` lines.
+link) drives the robot through it. The operator is a real headless Chromium on the drive page,
+through the same nginx (TLS) as the robot: a key press (its keydown event's time in the page) to the
+Twist at the robot, and the robot's odometry (its stamp, taken when the simulator publishes it) to
+the page's readout showing it. Receive times are the simulator's wall clock; the page's are
+``Date.now()``: one machine, one clock. The ``socket`` figures drive the server's sockets from Python
+instead (what the server and the uplink take, without a browser). Needs root (ip netns).
+Usage: ``.venv/bin/python bench/uplink.py``. Prints ``name: value`` lines.
 """
 
 from __future__ import annotations
@@ -26,15 +31,20 @@ sys.path.insert(0, str(ROOT / "bench"))
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "cyborg_site.settings")
 
 from _stats import quantile  # noqa: E402
+from playwright.sync_api import Page, expect, sync_playwright  # noqa: E402
 from websockets.asyncio.client import connect  # noqa: E402
+from websockets.typing import Origin  # noqa: E402
 
-from tests.stack import PYTHON, Stack, free_port  # noqa: E402
+from tests.browser.support import CHROMIUM, CHROMIUM_ARGS  # noqa: E402
+from tests.helpers import run_coroutine  # noqa: E402
+from tests.stack import PASSWORD, PYTHON, Stack, free_port  # noqa: E402
 from tests.support_processes import Client  # noqa: E402
 from tests.uplink.netns import Front, RobotSide, TestCA  # noqa: E402
 from tests.uplink.support import Agent  # noqa: E402
 
 DELAY_S, JITTER_S = 0.040, 0.010
 PRESSES = 25
+UPDATES_S = 15.0
 VIEWERS = 20
 CPU_S = 10.0
 FORWARD = {"type": "input", "linear": 0.3, "angular": 0.0}
@@ -112,12 +122,15 @@ class World:
             "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(video_relay_port),
             "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{video_relay_port}",
             "TRUSTED_PROXIES": "127.0.0.1", "CAMERA_RECORD_FPS": "0", "CAMERA_STREAMS_PER_PERSON": str(VIEWERS)})
+        self.front = Front(ip=self.side.host_ip, port=free_port(), uplink_port=uplink_port, ca=self.ca,
+                           web_port=self.stack.web_port)
+        self.stack.env.update(self.front.web_env())
         self.stack.start()
         self.sim = self.side.spawn([PYTHON, "manage.py", "simrobot", "--host", "127.0.0.1", "--port",
                                     str(self.sim_port), "--video-port", str(self.video_port), "--startup-s", "0.5"],
                                    self.stack.tmp / "sim.log", self.stack.env)
         self.side.wait_port(self.sim_port)
-        self.front = Front(ip=self.side.host_ip, port=free_port(), uplink_port=uplink_port, ca=self.ca).start()
+        self.front.start()
         self.relay = LatencyRelay((self.side.host_ip, free_port()), (self.side.host_ip, self.front.port))
         code = "from robot.uplink.credentials import credential_create\nprint(credential_create(robot='cyborg')[1])"
         credential = self.stack.manage("shell", "-c", code).strip().splitlines()[-1]
@@ -168,9 +181,10 @@ class World:
         self.side.down()
 
 
-async def key_to_twist(world: World) -> list[float]:
+async def socket_key_to_twist(world: World) -> list[float]:
+    """A teleop socket of our own: its input frame sent to the first moving Twist at the robot."""
     out = []
-    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=Origin(world.stack.url),
                        additional_headers={"Cookie": world.operator.cookie}) as ws:
         for i in range(PRESSES + 1):
             before = await asyncio.to_thread(world.twist_count)
@@ -185,9 +199,10 @@ async def key_to_twist(world: World) -> list[float]:
     return out
 
 
-async def update_to_browser(world: World, seconds: float = 6.0) -> list[float]:
+async def update_to_socket(world: World, seconds: float = 6.0) -> list[float]:
+    """A live socket of our own: the odometry's stamp to its frame arriving."""
     out: list[float] = []
-    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/live/", origin=world.stack.url,
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/live/", origin=Origin(world.stack.url),
                        additional_headers={"Cookie": world.operator.cookie}, max_size=None) as ws:
         await ws.send(json.dumps({"action": "watch", "keys": ["odom"]}))
         end = time.time() + seconds
@@ -202,8 +217,92 @@ async def update_to_browser(world: World, seconds: float = 6.0) -> list[float]:
     return out[10:]  # (the snapshot on watching, and the first frames)
 
 
+# The page's own record: each key event's time, and for each odometry update its stamp, when the live
+# socket delivered it and when the drive page's readout (#odom-vel) took it (the page updates the
+# readout in the same task; the observer runs right after).
+PAGE_HOOKS = """
+window.__bench = {keys: [], odom: [], pending: null};
+for (const type of ["keydown", "keyup"]) {
+  window.addEventListener(type, (ev) => {
+    if (!ev.repeat) window.__bench.keys.push([type, ev.key, Date.now()]);
+  }, true);
+}
+const NativeSocket = window.WebSocket;
+window.WebSocket = class extends NativeSocket {
+  constructor(url, protocols) {
+    super(url, protocols);
+    if (!String(url).includes("/ws/live/")) return;
+    this.addEventListener("message", (ev) => {
+      const at = Date.now(), frame = JSON.parse(ev.data);
+      const updates = frame.kind === "updates" ? frame.updates : frame.kind === "update" ? [frame] : [];
+      for (const u of updates) {
+        const stamp = u.key === "odom" && u.msg.header.stamp;
+        if (stamp) window.__bench.pending = [stamp.secs * 1000 + stamp.nsecs / 1e6, at];
+      }
+    });
+  }
+};
+document.addEventListener("DOMContentLoaded", () => {
+  const readout = document.getElementById("odom-vel");
+  if (!readout) return;
+  new MutationObserver(() => {
+    const pending = window.__bench.pending;
+    if (pending) window.__bench.odom.push([...pending, Date.now()]);
+    window.__bench.pending = null;
+  }).observe(readout, {attributes: true, attributeFilter: ["data-linear"]});
+});
+"""
+
+
+def open_drive_page(world: World, page: Page) -> None:
+    """An operator on the drive page, through nginx over TLS, holding the drive lock."""
+    site = world.front.web_url
+    page.add_init_script(PAGE_HOOKS)
+    page.goto(f"{site}/accounts/login/?next=/drive/")
+    page.fill("input[name=username]", "olga")
+    page.fill("input[name=password]", PASSWORD)
+    page.click("button[type=submit]")
+    page.wait_for_url(f"{site}/drive/")
+    take_drive(page)
+
+
+def take_drive(page: Page) -> None:
+    expect(page.locator("#lock-state")).to_have_text("Nobody is driving", timeout=30_000)
+    page.click("#lock-acquire")
+    expect(page.locator("#lock-state")).to_have_text("You are driving")
+
+
+def release_drive(page: Page) -> None:
+    page.click("#lock-release")
+    expect(page.locator("#lock-state")).to_have_text("Nobody is driving")
+
+
+def browser_key_to_twist(world: World, page: Page) -> list[float]:
+    """The browser's key press (its keydown event in the page) to the first moving Twist at the robot."""
+    out = []
+    for i in range(PRESSES + 1):
+        before = world.twist_count()
+        page.keyboard.down("w")
+        pressed_ms = page.evaluate("() => window.__bench.keys.filter(([t]) => t === 'keydown').at(-1)[2]")
+        got = world.first_twist(before, True)
+        page.keyboard.up("w")
+        world.first_twist(before, False)
+        time.sleep(0.3)  # (a pause between presses, as a driver's hands make)
+        if i:  # (the first press warms the page's path)
+            out.append(got * 1000 - pressed_ms)
+    return out
+
+
+def browser_update_to_page(page: Page, seconds: float = UPDATES_S) -> tuple[list[float], list[float]]:
+    """The robot's odometry (its stamp) to the page: its live socket delivering it, and its readout showing it."""
+    page.evaluate("() => { window.__bench.odom = []; }")
+    time.sleep(seconds)  # (collecting: the robot publishes at 10 Hz meanwhile)
+    records = page.evaluate("() => window.__bench.odom")[5:]
+    return [at - stamp for stamp, at, _ in records], [shown - stamp for stamp, _, shown in records]
+
+
 async def stall_to_zero(world: World) -> float:
-    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=world.stack.url,
+    async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=Origin(world.stack.url),
                        additional_headers={"Cookie": world.operator.cookie}) as ws:
         before = await asyncio.to_thread(world.twist_count)
         for _ in range(10):
@@ -250,20 +349,42 @@ def agent_cpu_pct(world: World, seconds: float = CPU_S) -> float:
     return (used() - start) / (time.monotonic() - at) * 100
 
 
+def _p(values: list[float], q: float) -> float:
+    return quantile(sorted(values), q)
+
+
 def main() -> None:
     if os.geteuid() != 0:
         raise SystemExit("bench/uplink.py needs root (a network namespace for the robot's side)")
+    if not os.path.exists(CHROMIUM):
+        raise SystemExit(f"Chromium not found at {CHROMIUM}: run `make browser`")
     world = World()
     try:
         cpu = agent_cpu_pct(world)
-        world.relay.delay_s, world.relay.jitter_s = 0.0, 0.0
-        no_delay = asyncio.run(key_to_twist(world))
-        world.relay.delay_s, world.relay.jitter_s = DELAY_S, JITTER_S
-        world.relay.cut()
-        world.wait_commands()
-        delayed = asyncio.run(key_to_twist(world))
-        updates = asyncio.run(update_to_browser(world))
-        stall = asyncio.run(stall_to_zero(world))
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
+            page = context.new_page()
+            page.set_default_timeout(15_000)
+            try:
+                world.relay.delay_s, world.relay.jitter_s = 0.0, 0.0
+                open_drive_page(world, page)
+                no_delay = browser_key_to_twist(world, page)
+                release_drive(page)
+                socket_no_delay = run_coroutine(socket_key_to_twist(world))
+                world.relay.delay_s, world.relay.jitter_s = DELAY_S, JITTER_S
+                world.relay.cut()
+                world.wait_commands()
+                socket_delayed = run_coroutine(socket_key_to_twist(world))
+                take_drive(page)
+                delayed = browser_key_to_twist(world, page)
+                release_drive(page)
+                to_socket, to_readout = browser_update_to_page(page)
+            finally:
+                context.close()
+                browser.close()
+        socket_updates = run_coroutine(update_to_socket(world))
+        stall = run_coroutine(stall_to_zero(world))
         reconnect = world.wait_commands()
         time.sleep(1)
         world.relay.cut()
@@ -271,11 +392,18 @@ def main() -> None:
         streams = video_streams(world)
     finally:
         world.stop()
-    print(f"uplink_key_to_twist_p99_ms: {quantile(sorted(delayed), 0.99):.1f}")
-    print(f"uplink_key_to_twist_p50_ms: {quantile(sorted(delayed), 0.5):.1f}")
-    print(f"uplink_key_to_twist_p99_ms_no_delay: {quantile(sorted(no_delay), 0.99):.1f}")
-    print(f"uplink_update_to_browser_p99_ms: {quantile(sorted(updates), 0.99):.1f}")
-    print(f"uplink_update_to_browser_p50_ms: {quantile(sorted(updates), 0.5):.1f}")
+    print(f"uplink_key_to_twist_p99_ms: {_p(delayed, 0.99):.1f}")
+    print(f"uplink_key_to_twist_p50_ms: {_p(delayed, 0.5):.1f}")
+    print(f"uplink_key_to_twist_p99_ms_no_delay: {_p(no_delay, 0.99):.1f}")
+    print(f"uplink_key_to_twist_p50_ms_no_delay: {_p(no_delay, 0.5):.1f}")
+    print(f"uplink_update_to_browser_p99_ms: {_p(to_readout, 0.99):.1f} ({len(to_readout)} updates)")
+    print(f"uplink_update_to_browser_p50_ms: {_p(to_readout, 0.5):.1f}")
+    print(f"uplink_update_to_browser_socket_p99_ms: {_p(to_socket, 0.99):.1f}")
+    print(f"uplink_socket_key_to_twist_p99_ms: {_p(socket_delayed, 0.99):.1f}")
+    print(f"uplink_socket_key_to_twist_p50_ms: {_p(socket_delayed, 0.5):.1f}")
+    print(f"uplink_socket_key_to_twist_p99_ms_no_delay: {_p(socket_no_delay, 0.99):.1f}")
+    print(f"uplink_update_to_socket_p99_ms: {_p(socket_updates, 0.99):.1f}")
+    print(f"uplink_update_to_socket_p50_ms: {_p(socket_updates, 0.5):.1f}")
     print(f"uplink_stall_to_zero_twist_ms: {stall:.0f}")
     print(f"uplink_reconnect_s: {reconnect:.2f}")
     print(f"uplink_video_upstream_streams: {streams} (for {VIEWERS} viewers)")
