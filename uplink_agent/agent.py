@@ -8,7 +8,7 @@ import time
 from urllib.parse import urlsplit
 
 from . import dial, mux, ws
-from .safety import Deadman, LocalGuard
+from .safety import Deadman, Lateness, LocalGuard
 
 log = logging.getLogger("uplink_agent")
 HIGH_WATER = 64 * 1024  # bytes waiting for the uplink before a video pump waits (rosbridge never does)
@@ -53,6 +53,7 @@ class Session:
         self.agent = agent
         self.socket = socket
         self.channels = {}
+        self.lateness = Lateness()
         self._drain_lock = asyncio.Lock()
 
     def send(self, kind, channel, payload=b""):
@@ -92,10 +93,14 @@ class Session:
                 return
             channel = self.channels[cid] = maker(self, cid, request)
             channel.start()
-        elif kind == mux.DATA:
+        elif kind in (mux.DATA, mux.STAMPED):
+            late = 0.0
+            if kind == mux.STAMPED:
+                stamp, payload = mux.split_stamp(payload)
+                late = self.lateness.late(stamp)
             target = self.channels.get(cid)
             if target is not None:
-                target.from_server(payload)
+                target.from_server(payload, late)
         elif kind == mux.CLOSE:
             ended = self.channels.pop(cid, None)
             if ended is not None:
@@ -151,7 +156,7 @@ class Channel:
     def cleanup(self):
         pass
 
-    def from_server(self, payload):
+    def from_server(self, payload, late):
         pass
 
 
@@ -174,8 +179,9 @@ class RosbridgeChannel(Channel):
             self.session.send(mux.DATA, self.cid, message)
             await self.session.drain(HIGH_WATER * 16)  # a burst (a map) may queue; never without bound
 
-    def from_server(self, payload):
-        self.session.agent.deadman.saw(payload)
+    def from_server(self, payload, late):
+        if not self.session.agent.deadman.passes(payload, late):
+            return
         if self.robot is not None and not self.robot.closed:
             self.robot.send_frame(ws.TEXT, payload)
 

@@ -9,16 +9,19 @@ server, at addresses it was configured with), either side closes them.
   HEAD    agent -> server  JSON {"status": 200, "headers": {"Content-Type": ...}}: an HTTP answer begins
   DATA    either way       one rosbridge message (UTF-8 JSON), or a piece of an HTTP body
   CLOSE   either way       UTF-8 reason: the channel is over
+  STAMPED server -> agent  as DATA, after 8 bytes of the server's monotonic clock when it sent it
+                           (a double, seconds): the agent can tell a message that waited in a stall
 """
 
 import json
 import struct
 
-OPEN, OPENED, HEAD, DATA, CLOSE = 1, 2, 3, 4, 5
-KINDS = (OPEN, OPENED, HEAD, DATA, CLOSE)
+OPEN, OPENED, HEAD, DATA, CLOSE, STAMPED = 1, 2, 3, 4, 5, 6
+KINDS = (OPEN, OPENED, HEAD, DATA, CLOSE, STAMPED)
 # The only paths the agent fetches from the robot's video server.
 HTTP_PATHS = ("/stream", "/snapshot")
 _HEAD = struct.Struct("!BI")
+_STAMP = struct.Struct("!d")
 
 
 class BadFrame(ValueError):
@@ -31,6 +34,17 @@ def encode(kind, channel, payload=b""):
 
 def encode_json(kind, channel, value):
     return encode(kind, channel, json.dumps(value, separators=(",", ":")).encode())
+
+
+def encode_stamped(channel, stamp, payload):
+    return _HEAD.pack(STAMPED, channel) + _STAMP.pack(stamp) + payload
+
+
+def split_stamp(payload):
+    """(stamp, message) of a STAMPED frame's payload."""
+    if len(payload) < _STAMP.size:
+        raise BadFrame("a stamped frame without its stamp")
+    return _STAMP.unpack_from(payload)[0], payload[_STAMP.size:]
 
 
 def decode(message):

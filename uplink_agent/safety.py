@@ -3,7 +3,9 @@
 ``Deadman`` watches the drive commands passing through to the robot. While they say "move", each
 must be followed by another within ``deadman_s``; when none comes (the server stalled, the uplink
 froze) or the uplink drops, ``LocalGuard`` publishes a zero Twist on a rosbridge session of the
-agent's own, which does not depend on the uplink or on the sessions it carries.
+agent's own, which does not depend on the uplink or on the sessions it carries. When a frozen
+uplink thaws, TCP delivers what waited in one burst: a drive command that arrives later than
+``deadman_s`` after the server sent it (``Lateness``) is dropped, so the robot does not replay it.
 """
 
 import asyncio
@@ -75,6 +77,34 @@ class LocalGuard:
         return True
 
 
+class Lateness:
+    """How much later than usual a server-stamped message arrives, without synchronised clocks.
+
+    Arrival minus stamp is the clocks' offset plus the message's delay; its smallest value over the
+    last ``window_s`` (the fastest trip lately, which also follows the clocks' slow drift) stands
+    for the offset plus the usual delay, and each message's excess over it is how long it waited."""
+
+    BUCKET_S = 5.0
+
+    def __init__(self, window_s=60.0, clock=time.monotonic):
+        self.clock = clock
+        self.keep = max(1, int(window_s / self.BUCKET_S))
+        self.buckets = []  # [bucket number, smallest arrival - stamp in it], oldest first
+        self.baseline = None
+
+    def late(self, stamp):
+        now = self.clock()
+        gap = now - stamp
+        number = int(now / self.BUCKET_S)
+        if self.buckets and self.buckets[-1][0] == number:
+            self.buckets[-1][1] = min(self.buckets[-1][1], gap)
+        else:
+            self.buckets.append([number, gap])
+            del self.buckets[:-self.keep]
+        self.baseline = min(minimum for _, minimum in self.buckets)
+        return gap - self.baseline
+
+
 class Deadman:
     """Stops the robot when drive commands stop arriving while it was told to move."""
 
@@ -86,27 +116,36 @@ class Deadman:
         self.needle = json.dumps(topic).encode()
         self.driving = False
         self.last_drive = 0.0
+        self.stale_dropped = 0
         self._timer = None
 
-    def saw(self, frame):
-        """A rosbridge frame on its way to the robot."""
+    def passes(self, frame, late=0.0):
+        """Whether a rosbridge frame on its way to the robot goes on to it (``late``: seconds it waited
+        beyond the usual, ``Lateness``). Only a stale drive command that says "move" is held back."""
         if self.needle not in frame:
-            return
+            return True
         try:
             message = json.loads(frame.decode())
         except ValueError:
-            return
+            return True
         if not isinstance(message, dict) or message.get("op") != "publish" or message.get("topic") != self.topic:
-            return
+            return True
+        go = moving(message.get("msg") or {})
+        if go and late > self.deadman_s:
+            if not self.stale_dropped % 50:
+                log.warning("dropped a drive command %.2f s late (held up in the uplink)", late)
+            self.stale_dropped += 1
+            return False
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        if moving(message.get("msg") or {}):
+        if go:
             self.driving = True
             self.last_drive = time.monotonic()
             self._timer = self.loop.call_later(self.deadman_s, self.stop, "no drive command for %g s" % self.deadman_s)
         else:
             self.driving = False
+        return True
 
     def stop(self, why):
         """Send zero now if the robot may be moving (``why`` goes to the log)."""

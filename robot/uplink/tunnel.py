@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
+import time
 from typing import Any
 
 from websockets.asyncio.server import ServerConnection
@@ -59,7 +60,7 @@ class Channel:
     async def send(self, payload: bytes) -> None:
         if self.closed:
             raise ChannelClosed("channel closed")
-        await self.tunnel.connection.send(mux.encode(mux.DATA, self.cid, payload))
+        await self.tunnel.connection.send(mux.encode_stamped(self.cid, time.monotonic(), payload))
 
     def close(self, reason: str = "") -> None:
         """Idempotent; tells the agent unless it closed the channel itself."""

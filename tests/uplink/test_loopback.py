@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import time
 
 import pytest
 from websockets.asyncio.client import connect
@@ -10,6 +11,8 @@ from websockets.exceptions import InvalidStatus
 
 from robot.models import AuditEntry
 from tests.helpers import async_wait_until
+from tests.stack import free_port
+from tests.uplink.relay import LatencyRelay
 
 pytestmark = [pytest.mark.wiring, pytest.mark.django_db(transaction=True)]
 
@@ -140,3 +143,53 @@ async def test_it_dials_through_an_http_proxy(sim, endpoint, credential, agent_f
         assert tunnels == [f"127.0.0.1:{endpoint.port}"]
     finally:
         server.close()
+
+
+def _twist(x: float) -> dict:
+    return {"op": "publish", "topic": "/cmd_vel", "msg_type": "geometry_msgs/Twist",
+            "msg": {"linear": {"x": x, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}}
+
+
+async def _drive(link, x: float, seconds: float) -> None:
+    """The teleop rate (20 Hz) of Twists of forward speed ``x``, for ``seconds``."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        reply = await link.execute(_twist(x))
+        assert reply["ok"], reply
+        await asyncio.sleep(0.05)
+
+
+def _speeds_since(sim, count: int) -> list[float]:
+    new = sim.received_count("/cmd_vel") - count
+    return [m["linear"]["x"] for m in sim.received("/cmd_vel")[-new:]] if new > 0 else []
+
+
+async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(sim, endpoint, credential,
+                                                                               agent_for):
+    """A frozen uplink thaws with what waited in it: the agent stops the robot during the freeze and
+    drops the Twists that waited past its deadman time, and a fresh one after the thaw drives again."""
+    _, text = credential
+    relay = LatencyRelay(("127.0.0.1", free_port()), (endpoint.host, endpoint.port))
+    agent = agent_for(text, UPLINK_SERVER_URL=f"ws://127.0.0.1:{relay.listen[1]}/uplink/")
+    await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
+    link, tasks = await _link()
+    try:
+        await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
+        before = sim.received_count("/cmd_vel")
+        await _drive(link, 0.3, 0.4)
+        await async_wait_until(lambda: 0.3 in _speeds_since(sim, before), timeout=5, what="driving at the robot")
+        relay.frozen = True
+        frozen_at = sim.received_count("/cmd_vel")
+        await _drive(link, 0.2, 0.5)  # the operator holds the key; nothing gets through
+        # The agent's deadman: its zero, on its own session to the robot.
+        await async_wait_until(lambda: 0.0 in _speeds_since(sim, frozen_at), timeout=5, what="the agent's zero")
+        await asyncio.sleep(0.6)  # the oldest waited Twist is now over a second old, the newest 0.6 s
+        thawed_at = sim.received_count("/cmd_vel")
+        relay.frozen = False
+        await _drive(link, 0.1, 0.4)
+        await async_wait_until(lambda: 0.1 in _speeds_since(sim, thawed_at), timeout=5, what="driving again")
+        assert 0.2 not in _speeds_since(sim, thawed_at), "a Twist held up in the freeze reached the robot"
+        assert "dropped a drive command" in agent.log()
+    finally:
+        await _stop(link, tasks)
+        relay.close()
