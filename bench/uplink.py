@@ -22,8 +22,10 @@ import socket
 import sys
 import threading
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -331,7 +333,19 @@ async def stall_to_zero(world: World) -> float:
 
 def video_streams(world: World) -> int:
     request = urllib.request.Request(f"{world.stack.url}/video/stream", headers={"Cookie": world.operator.cookie})
-    viewers = [urllib.request.urlopen(request, timeout=10) for _ in range(VIEWERS)]
+    deadline = time.monotonic() + 10
+
+    def watch() -> Any:
+        """One viewer; a 503 (the camera not yet back through a reconnected uplink) is tried again until then."""
+        while True:
+            try:
+                return urllib.request.urlopen(request, timeout=10)
+            except urllib.error.HTTPError as exc:
+                if exc.code != 503 or time.monotonic() > deadline:
+                    raise
+            time.sleep(0.1)
+
+    viewers = [watch() for _ in range(VIEWERS)]
     try:
         for viewer in viewers:
             seen = b""
