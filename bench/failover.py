@@ -85,7 +85,7 @@ def web_failover(topo: Topology, browser) -> float:
 
     page.on("websocket", opened)
     login(page, topo, "vera")
-    page.wait_for_function("document.querySelector('#link-pill').textContent === 'robot online'")
+    page.wait_for_function("() => document.querySelector('#link-pill').textContent === 'robot online'")
     try:
         for victim in ("web-a", "web-b"):
             live = sockets[-1]
@@ -130,7 +130,7 @@ def redis_restart(topo: Topology, redis_server: PrivateRedis, browser) -> float:
             status = 0
         if status == 200:
             try:
-                page.wait_for_function(f"document.querySelector('[data-field=\"tts.last\"]').textContent === {text!r}",
+                page.wait_for_function(f"() => document.querySelector('[data-field=\"tts.last\"]').textContent === {text!r}",
                                        timeout=1000)
                 break
             except Exception:

@@ -17,10 +17,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
-import random
-import socket
 import sys
-import threading
 import time
 import urllib.error
 import urllib.request
@@ -42,75 +39,15 @@ from tests.helpers import run_coroutine  # noqa: E402
 from tests.stack import PASSWORD, PYTHON, Stack, free_port  # noqa: E402
 from tests.support_processes import Client  # noqa: E402
 from tests.uplink.netns import Front, RobotSide, TestCA  # noqa: E402
+from tests.uplink.relay import LatencyRelay  # noqa: E402
 from tests.uplink.support import Agent  # noqa: E402
 
 DELAY_S, JITTER_S = 0.040, 0.010
-PRESSES = 25
+PRESSES = 100  # enough that the p99 is not simply the slowest press
 UPDATES_S = 15.0
 VIEWERS = 20
 CPU_S = 10.0
 FORWARD = {"type": "input", "linear": 0.3, "angular": 0.0}
-
-
-class LatencyRelay:
-    """TCP from ``listen`` to ``target`` with a delay each way (order kept), on a loop of its own.
-    ``frozen`` holds every byte; ``cut()`` drops every connection."""
-
-    def __init__(self, listen: tuple[str, int], target: tuple[str, int]) -> None:
-        self.listen, self.target = listen, target
-        self.delay_s, self.jitter_s = DELAY_S, JITTER_S
-        self.frozen = False
-        self.loop = asyncio.new_event_loop()
-        self.writers: set[asyncio.StreamWriter] = set()
-        threading.Thread(target=self.loop.run_forever, daemon=True).start()
-        asyncio.run_coroutine_threadsafe(self._start(), self.loop).result(5)
-
-    async def _start(self) -> None:
-        self.server = await asyncio.start_server(self._serve, *self.listen)
-
-    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        try:
-            up_reader, up_writer = await asyncio.open_connection(*self.target)
-        except OSError:
-            writer.close()
-            return
-        for w in (writer, up_writer):
-            w.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            self.writers.add(w)
-        await asyncio.gather(self._pipe(reader, up_writer), self._pipe(up_reader, writer), return_exceptions=True)
-        for w in (writer, up_writer):
-            self.writers.discard(w)
-            w.close()
-
-    async def _pipe(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        queue: asyncio.Queue[tuple[float, bytes]] = asyncio.Queue()
-
-        async def deliver() -> None:
-            while True:
-                due, chunk = await queue.get()
-                while self.frozen or time.monotonic() < due:
-                    await asyncio.sleep(0.001 if not self.frozen else 0.01)
-                writer.write(chunk)
-                await writer.drain()
-
-        sender = asyncio.ensure_future(deliver())
-        last_due = 0.0
-        try:
-            while chunk := await reader.read(65536):
-                delay = max(0.0, self.delay_s + random.uniform(-self.jitter_s, self.jitter_s))
-                last_due = max(last_due, time.monotonic() + delay)  # a later chunk never overtakes
-                queue.put_nowait((last_due, chunk))
-            while not queue.empty():
-                await asyncio.sleep(0.005)
-        finally:
-            sender.cancel()
-            writer.close()
-
-    def cut(self) -> None:
-        def close_all() -> None:
-            for w in list(self.writers):
-                w.transport.abort()
-        self.loop.call_soon_threadsafe(close_all)
 
 
 class World:
@@ -123,7 +60,7 @@ class World:
             "UPLINK": "true", "UPLINK_LISTEN": f"127.0.0.1:{uplink_port}",
             "UPLINK_ROSBRIDGE_PORT": str(relay_port), "UPLINK_VIDEO_PORT": str(video_relay_port),
             "ROSBRIDGE_URL": f"ws://127.0.0.1:{relay_port}", "VIDEO_URL": f"http://127.0.0.1:{video_relay_port}",
-            "TRUSTED_PROXIES": "127.0.0.1", "CAMERA_RECORD_FPS": "0", "CAMERA_STREAMS_PER_PERSON": str(VIEWERS)})
+            "TRUSTED_PROXIES": "127.0.0.1", "CAMERA_STREAMS_PER_PERSON": str(VIEWERS)})
         self.front = Front(ip=self.side.host_ip, port=free_port(), uplink_port=uplink_port, ca=self.ca,
                            web_port=self.stack.web_port)
         self.stack.env.update(self.front.web_env())
@@ -133,7 +70,8 @@ class World:
                                    self.stack.tmp / "sim.log", self.stack.env)
         self.side.wait_port(self.sim_port)
         self.front.start()
-        self.relay = LatencyRelay((self.side.host_ip, free_port()), (self.side.host_ip, self.front.port))
+        self.relay = LatencyRelay((self.side.host_ip, free_port()), (self.side.host_ip, self.front.port),
+                                  delay_s=DELAY_S, jitter_s=JITTER_S)
         code = "from robot.uplink.credentials import credential_create\nprint(credential_create(robot='cyborg')[1])"
         credential = self.stack.manage("shell", "-c", code).strip().splitlines()[-1]
         self.agent = Agent(server_url=f"wss://{self.side.host_ip}:{self.relay.listen[1]}/uplink/",
@@ -331,7 +269,16 @@ async def stall_to_zero(world: World) -> float:
     return (zero_at - frozen_at) * 1000
 
 
-def video_streams(world: World) -> int:
+def video_streams(world: World) -> tuple[int, int]:
+    """The robot's video server's open streams: before the viewers come (the camera recorder's, at its
+    own size) and what the viewers add."""
+    deadline = time.monotonic() + 10  # the recorder dials again within seconds of a reconnect
+    while (before := int(world.sim_get("/sim/introspect")["video_streams"])) < 1 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return before, _viewers_streams(world) - before
+
+
+def _viewers_streams(world: World) -> int:
     request = urllib.request.Request(f"{world.stack.url}/video/stream", headers={"Cookie": world.operator.cookie})
     deadline = time.monotonic() + 10
 
@@ -432,7 +379,8 @@ def main() -> None:
     print(f"uplink_update_to_socket_p50_ms: {_p(socket_updates, 0.5):.1f}")
     print(f"uplink_stall_to_zero_twist_ms: {stall:.0f}")
     print(f"uplink_reconnect_s: {reconnect:.2f}")
-    print(f"uplink_video_upstream_streams: {streams} (for {VIEWERS} viewers)")
+    print(f"uplink_video_upstream_streams: {streams[1]} (for {VIEWERS} viewers)")
+    print(f"uplink_video_recorder_streams: {streams[0]} (the camera recorder's own, at its size)")
     print(f"uplink_agent_cpu_pct: {cpu:.1f}")
     print(f"uplink_injected_delay_ms: {DELAY_S * 1000:.0f} each way, jitter {JITTER_S * 1000:.0f}")
 
