@@ -49,9 +49,9 @@ def rows(topic: str, start: float, end: float) -> list[tuple[float, dict]]:
 def set_policies(topo: Topology) -> None:
     topo.manage("shell", "-c", (
         "from history.policies import policy_upsert\n"
-        "policy_upsert(topic='/odom', msg_type='nav_msgs/Odometry', mode='every')\n"
         f"policy_upsert(topic='/robot_pose', msg_type='geometry_msgs/Pose', mode='periodic', interval_s={INTERVAL_S})\n"
     ))
+    topo.record_every("/odom", "nav_msgs/Odometry")
 
 
 def link_failover(topo: Topology, database_url: str) -> tuple[float, int, int]:
@@ -130,8 +130,9 @@ def redis_restart(topo: Topology, redis_server: PrivateRedis, browser) -> float:
             status = 0
         if status == 200:
             try:
-                page.wait_for_function(f"() => document.querySelector('[data-field=\"tts.last\"]').textContent === {text!r}",
-                                       timeout=1000)
+                page.wait_for_function(
+                    f"() => document.querySelector('[data-field=\"tts.last\"]').textContent === {text!r}",
+                    timeout=1000)
                 break
             except Exception:
                 pass

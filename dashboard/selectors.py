@@ -11,6 +11,7 @@ from dashboard.routing import AUDIO_SOCKET_PATH
 from robot import interface as ri
 from robot.live.keys import HOME_KEYS
 
+
 def audio_config() -> dict[str, str]:
     """What the audio card (static/js/audio.js) needs, on every page that shows it."""
     return {"audio_socket": AUDIO_SOCKET_PATH, "audio_worklet": static("js/audio-capture.js")}

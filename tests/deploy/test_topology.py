@@ -46,14 +46,7 @@ def topology():
     with on_private_services(env={"COMMAND_THROTTLE_RATE": "2000/min"}) as topo:
         topo.env["STACK_SIM_ARGS"] = f"--pose-rate {RATE_HZ:g}"
         topo.up()
-        topo.manage("shell", "-c", "from history.policies import policy_upsert\n"
-                    f"policy_upsert(topic={ODOM!r}, msg_type={ri.topic('odom').type!r}, mode='every')")
-        # Until then the default policy sampled it once a second: those rows leave gaps no recorder lost.
-        # Both samplers take the new policy within a second or two; what is recorded from then on is whole.
-        time.sleep(3)
-        topo.manage("shell", "-c", "import datetime\nfrom history.models import Sample\n"
-                    "since = datetime.datetime.now(datetime.UTC) - datetime.timedelta(seconds=1)\n"
-                    f"Sample.objects.filter(topic={ODOM!r}, received_at__lt=since).delete()")
+        topo.record_every(ODOM, ri.topic("odom").type)
         yield topo
 
 

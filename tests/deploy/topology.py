@@ -208,6 +208,17 @@ class Topology:
         with urllib.request.urlopen(url, timeout=5) as res:
             return [m["msg"] for m in json.loads(res.read())["messages"]]
 
+    def record_every(self, topic: str, msg_type: str) -> None:
+        """Record every message of ``topic`` from now on. Until now the default policy sampled it (once a
+        second for odometry): those rows leave gaps no recorder lost, so they go. Both links' samplers
+        take the new policy within a second or two; what is recorded from then on is whole."""
+        self.manage("shell", "-c", "from history.policies import policy_upsert\n"
+                    f"policy_upsert(topic={topic!r}, msg_type={msg_type!r}, mode='every')")
+        time.sleep(3)
+        self.manage("shell", "-c", "import datetime\nfrom history.models import Sample\n"
+                    "since = datetime.datetime.now(datetime.UTC) - datetime.timedelta(seconds=1)\n"
+                    f"Sample.objects.filter(topic={topic!r}, received_at__lt=since).delete()")
+
     def recorded_seqs(self, database_url: str, topic: str) -> list[int]:
         """header.seq of every recorded message of ``topic``, in order."""
         import psycopg
