@@ -124,8 +124,9 @@ class World:
 async def socket_key_to_twist(world: World) -> list[float]:
     """A teleop socket of our own: its input frame sent to the first moving Twist at the robot."""
     out = []
+    # (It never reads what the socket says: an unbounded queue keeps the client reading, pongs included.)
     async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=Origin(world.stack.url),
-                       additional_headers={"Cookie": world.operator.cookie}) as ws:
+                       additional_headers={"Cookie": world.operator.cookie}, max_queue=None) as ws:
         for i in range(PRESSES + 1):
             before = await asyncio.to_thread(world.twist_count)
             sent = time.time()
@@ -250,8 +251,9 @@ def browser_update_to_page(page: Page, seconds: float = UPDATES_S) -> tuple[list
 
 
 async def stall_to_zero(world: World) -> float:
+    # (It never reads what the socket says: an unbounded queue keeps the client reading, pongs included.)
     async with connect(f"ws://127.0.0.1:{world.stack.web_port}/ws/teleop/", origin=Origin(world.stack.url),
-                       additional_headers={"Cookie": world.operator.cookie}) as ws:
+                       additional_headers={"Cookie": world.operator.cookie}, max_queue=None) as ws:
         before = await asyncio.to_thread(world.twist_count)
         for _ in range(10):
             await ws.send(json.dumps(FORWARD))
