@@ -34,7 +34,7 @@ from rest_framework.request import Request
 from cyborg_site.roles import roles_cached
 from robot.api.commands import FieldCommandView
 from robot.api.errors import BoundedJSONParser, SafeJSONRenderer, api_exception_handler, api_server_error
-from robot.api.fast_state import SiteChecks, json_accepted, trusted_token_user
+from robot.api.fast_state import SiteChecks, json_accepted, renew_token_trust, trusted_token_user
 from robot.api.validation import body_dict, reject_unknown
 from robot.commands.pipeline import Command, arun
 
@@ -77,6 +77,8 @@ class FastCommandApp:
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["method"] == "POST" and scope["path"].startswith("/api/robot/"):
+            if command_view(scope["path"]) is not None:  # (never the E-STOP: it must not wait on the database)
+                await renew_token_trust(_headers(scope).get(b"authorization", b""))
             caller = self.eligible(scope)
             if caller is not None:
                 body, more = await _read(receive, caller[3])

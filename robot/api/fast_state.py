@@ -76,10 +76,29 @@ def json_accepted(accept: bytes) -> bool:
     return accept.split(b";", 1)[0].strip().decode("latin1") in JSON_ACCEPT
 
 
+def _token_key(authorization: bytes) -> str | None:
+    scheme, _, key = authorization.decode("latin1").partition(" ")
+    return key.strip() if scheme.lower() == "token" else None
+
+
 def trusted_token_user(authorization: bytes) -> Any:
     """The user of an ``Authorization: Token`` header the token cache trusts, else None."""
-    scheme, _, key = authorization.decode("latin1").partition(" ")
-    return CachedTokenAuthentication.cached_user(key.strip()) if scheme.lower() == "token" else None
+    key = _token_key(authorization)
+    return CachedTokenAuthentication.cached_user(key) if key is not None else None
+
+
+async def renew_token_trust(authorization: bytes) -> None:
+    """Before a fast path judges a caller: a known token whose trust ran out is renewed (one query)."""
+    key = _token_key(authorization)
+    if key is not None and CachedTokenAuthentication.cached_user(key) is None:
+        await CachedTokenAuthentication.arenew(key)
+
+
+def _authorization(scope: dict[str, Any]) -> bytes:
+    for name, value in scope["headers"]:
+        if name == b"authorization":
+            return value
+    return b""
 
 
 class FastStateApp:
@@ -98,6 +117,7 @@ class FastStateApp:
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
+            await renew_token_trust(_authorization(scope))
             headers = self.response_headers(scope)
             if headers is not None:
                 body = self._renderer.render(await arobot_state())

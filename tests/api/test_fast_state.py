@@ -1,6 +1,7 @@
 """The state API answered on the event loop for a token the process already trusts: the same answer
 as the DRF view, no Django handler, and every other request still goes to Django."""
 
+import asyncio
 import json
 
 import pytest
@@ -126,3 +127,44 @@ async def test_hsts_follows_the_proxys_scheme_header(viewer, settings):
     assert await hsts("https") == b"max-age=3600"
     assert await hsts("http") is None
     assert await hsts("https") == b"max-age=3600"
+
+
+def _run_out(headers: dict[str, str]) -> None:
+    """The process's trust in the token runs out (as it does TOKEN_CACHE_S after it was last asked)."""
+    key = headers["Authorization"].removeprefix("Token ")
+    _, user, token = CachedTokenAuthentication._cache[key]
+    CachedTokenAuthentication._cache[key] = (0.0, user, token)
+
+
+async def test_when_trust_runs_out_many_callers_stay_on_the_fast_path_behind_one_query(viewer, django_calls,
+                                                                                     monkeypatch):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    assert (await get(headers))["status"] == 200
+    asked: list[str] = []
+    real = CachedTokenAuthentication._renew
+
+    def renew(key: str) -> object:
+        asked.append(key)
+        return real(key)
+
+    monkeypatch.setattr(CachedTokenAuthentication, "_renew", classmethod(lambda cls, key: renew(key)))
+    _run_out(headers)
+    answers = await asyncio.gather(*(get(headers) for _ in range(20)))
+    assert [a["status"] for a in answers] == [200] * 20
+    assert django_calls == [PATH]  # only the very first request, which cached the token
+    assert len(asked) == 1
+
+
+async def test_a_renewal_sees_a_change_made_in_another_process(viewer, django_calls):
+    from asgiref.sync import sync_to_async
+
+    headers = await sync_to_async(token_for)(viewer)
+    assert (await get(headers))["status"] == 200
+    await sync_to_async(type(viewer).objects.filter(pk=viewer.pk).update)(is_active=False)  # no signal here
+    assert (await get(headers))["status"] == 200  # still trusted, for at most TOKEN_CACHE_S
+    _run_out(headers)
+    response = await get(headers)
+    assert response["status"] == 401 and json.loads(response["body"])["code"] == "authentication_failed"
+    assert django_calls == [PATH, PATH]  # the refusal is Django's, in the API's error shape
