@@ -172,8 +172,9 @@ current: BlackBox | None = None
 async def run_blackbox(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
     global current
-    current = BlackBox()
+    current = box = BlackBox()
     try:
-        await current.run(link)
+        await box.run(link)
     finally:
-        current = None
+        if current is box:
+            current = None

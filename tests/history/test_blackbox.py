@@ -164,9 +164,11 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
     # A web process marks the moment: only the database tells the black box.
     incident = await sync_to_async(incident_open)(kind=Incident.Kind.MANUAL, t=time.time(), by="otto")
     await asyncio.sleep(1.5)
-    first.cancel()  # the link's process stops (a deploy, a failover) in the middle of the window
-    await asyncio.gather(first, return_exceptions=True)
+    # The link's process hands over (a deploy, a failover) in the middle of the window: the next one
+    # starts hearing the robot as the old one stops and writes what it took.
+    first.cancel()
     second = asyncio.ensure_future(blackbox.run_blackbox(link))
+    await asyncio.gather(first, return_exceptions=True)
     try:
         await asyncio.sleep(incident.end - time.time() + 1.5)
     finally:
