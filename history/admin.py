@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from typing import Any
 
-from asgiref.sync import async_to_sync
 from django.contrib import admin, messages
 from django.db import transaction
 from django.db.models import Max, Min, QuerySet
@@ -17,10 +17,10 @@ from django.utils.html import format_html
 from history.durations import DurationInSeconds
 from history.incidents import incident_release
 from history.models import Incident, Mode, RecordingSettings, Sample, TopicPolicy
-from history.policies import policies_add_discovered
-from history.policy_audit import audit_default_interval, audit_policies, default_interval_now, policies_now
+from history.policies import policies_discover
+from history.policy_audit import default_interval_audited, policies_audited
 from history.storage import samples_deleted
-from robot.link.bus import RobotError, acall_service
+from robot.link.bus import RobotError
 
 
 @admin.register(RecordingSettings)
@@ -34,23 +34,20 @@ class RecordingSettingsAdmin(admin.ModelAdmin):
         return False
 
     def save_model(self, request: HttpRequest, obj: Any, form: Any, change: bool) -> None:
-        before = default_interval_now()
-        super().save_model(request, obj, form, change)
-        audit_default_interval(user=request.user, source="page", before=before, after=obj.default_interval_s)
+        with default_interval_audited(user=request.user, source="page"):
+            super().save_model(request, obj, form, change)
 
 
-def _audited(request: HttpRequest, topics: list[str], change: Callable[[], Any]) -> Any:
-    before = policies_now(topics)
-    result = change()
-    audit_policies(user=request.user, source="page", before=before, after=policies_now(topics))
-    return result
+def _audited(request: HttpRequest, topics: list[str]) -> AbstractContextManager[None]:
+    """What the block changes of ``topics``' policies, audited as done on the admin pages."""
+    return policies_audited(user=request.user, source="page", topics=topics)
 
 
 def _set_mode(mode: str) -> Callable[[Any, HttpRequest, QuerySet[TopicPolicy]], None]:
     @admin.action(description=f"Record selected topics: {Mode(mode).label}")
     def action(modeladmin: Any, request: HttpRequest, queryset: QuerySet[TopicPolicy]) -> None:
-        topics = list(queryset.values_list("topic", flat=True))
-        count = _audited(request, topics, lambda: queryset.update(mode=mode))
+        with _audited(request, list(queryset.values_list("topic", flat=True))):
+            count = queryset.update(mode=mode)
         modeladmin.message_user(request, f"{count} topic(s) now recorded: {Mode(mode).label}.")
 
     action.__name__ = f"set_mode_{mode}"
@@ -85,15 +82,16 @@ class TopicPolicyAdmin(admin.ModelAdmin):
     def save_model(self, request: HttpRequest, obj: Any, form: Any, change: bool) -> None:
         # (the list's inline edits come here too, one policy at a time)
         topics = [obj.topic, *([form.initial["topic"]] if change and form.initial.get("topic") else [])]
-        _audited(request, list(dict.fromkeys(topics)), lambda: super(TopicPolicyAdmin, self).save_model(
-            request, obj, form, change))
+        with _audited(request, list(dict.fromkeys(topics))):
+            super().save_model(request, obj, form, change)
 
     def delete_model(self, request: HttpRequest, obj: Any) -> None:
-        _audited(request, [obj.topic], lambda: super(TopicPolicyAdmin, self).delete_model(request, obj))
+        with _audited(request, [obj.topic]):
+            super().delete_model(request, obj)
 
     def delete_queryset(self, request: HttpRequest, queryset: QuerySet[TopicPolicy]) -> None:
-        topics = list(queryset.values_list("topic", flat=True))
-        _audited(request, topics, lambda: super(TopicPolicyAdmin, self).delete_queryset(request, queryset))
+        with _audited(request, list(queryset.values_list("topic", flat=True))):
+            super().delete_queryset(request, queryset)
 
     def get_urls(self) -> list[Any]:
         custom = [path("discover/", self.admin_site.admin_view(self.discover), name="history_topicpolicy_discover")]
@@ -104,27 +102,29 @@ class TopicPolicyAdmin(admin.ModelAdmin):
         if request.method != "POST" or not self.has_add_permission(request):
             return redirect("admin:history_topicpolicy_changelist")
         try:
-            reply = async_to_sync(acall_service)("rosapi_topics") or {}
+            discovered, added = policies_discover(user=request.user, source="page")
         except RobotError as exc:
             self.message_user(request, f"Could not ask the robot for its topics: {exc.message}", messages.ERROR)
             return redirect("admin:history_topicpolicy_changelist")
-        pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
-        added = _audited(request, [name for name, _ in pairs], lambda: policies_add_discovered(topics=pairs))
-        self.message_user(request, f"The robot reports {len(pairs)} topics; added {len(added)} new (recording off).")
+        self.message_user(request, f"The robot reports {discovered} topics; added {len(added)} new (recording off).")
         return redirect("admin:history_topicpolicy_changelist")
 
 
-@admin.register(Sample)
-class SampleAdmin(admin.ModelAdmin):
-    list_display = ("topic", "msg_type", "received_at")
-    search_fields = ("topic",)
-    show_full_result_count = False  # counting millions of rows on every page view is slow
+class _ReadOnlyAdmin(admin.ModelAdmin):
+    """Rows the server makes: an admin reads them (and deletes or releases), never adds or edits one."""
 
     def has_add_permission(self, request: HttpRequest) -> bool:
         return False
 
     def has_change_permission(self, request: HttpRequest, obj: Any = None) -> bool:
         return False
+
+
+@admin.register(Sample)
+class SampleAdmin(_ReadOnlyAdmin):
+    list_display = ("topic", "msg_type", "received_at")
+    search_fields = ("topic",)
+    show_full_result_count = False  # counting millions of rows on every page view is slow
 
     def delete_model(self, request: HttpRequest, obj: Sample) -> None:
         self.delete_queryset(request, Sample.objects.filter(pk=obj.pk))
@@ -139,18 +139,12 @@ class SampleAdmin(admin.ModelAdmin):
 
 
 @admin.register(Incident)
-class IncidentAdmin(admin.ModelAdmin):
+class IncidentAdmin(_ReadOnlyAdmin):
     """Incidents are made by the black box; an admin only reads them and releases them to retention."""
 
     list_display = ("t", "kind", "summary", "by", "driver", "complete", "held", "released_by")
     list_filter = ("kind", "held", "complete")
     actions = ["release"]
-
-    def has_add_permission(self, request: HttpRequest) -> bool:
-        return False
-
-    def has_change_permission(self, request: HttpRequest, obj: Any = None) -> bool:
-        return False
 
     @admin.action(description="Release to retention (its samples and frames age like the rest)")
     def release(self, request: HttpRequest, queryset: QuerySet[Incident]) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import AsyncIterator, Iterable, Iterator
 from typing import Any
 
-from asgiref.sync import async_to_sync, sync_to_async
+from asgiref.sync import sync_to_async
 from django.conf import settings
 from django.db import transaction
 from django.http import StreamingHttpResponse
@@ -25,11 +25,9 @@ from history.access import refusal, refused_topics
 from history.downsample import series
 from history.export import EXPORTERS, FORMATS
 from history.models import RecordingSettings, TopicPolicy
-from history.policies import default_interval_set, effective_interval, policies_add_discovered, policy_upsert
-from history.policy_audit import audit_default_interval, audit_policies, default_interval_now, policies_now
+from history.policies import default_interval_set, effective_interval, policies_discover, policy_upsert
+from history.policy_audit import default_interval_audited, policies_audited
 from history.selectors import recorded_messages, recorded_topics, state_timeline
-from robot import interface as ri
-from robot.link.bus import acall_service
 
 
 class AdminWrites(permissions.BasePermission):
@@ -39,9 +37,13 @@ class AdminWrites(permissions.BasePermission):
         return request.method in permissions.SAFE_METHODS or is_admin(request.user)
 
 
-def _refuse_sensitive(request: Request, topic: str) -> None:
-    if refused_topics(request.user, [topic]):
-        raise exceptions.PermissionDenied(refusal(topic))
+def _topic_query(request: Request, shape: type[s.RangeIn]) -> dict[str, Any]:
+    """The request's query, validated; a topic for operators only is refused to a viewer."""
+    q = shape(data=request.query_params)
+    q.is_valid(raise_exception=True)
+    if refused_topics(request.user, [q.validated_data["topic"]]):
+        raise exceptions.PermissionDenied(refusal(q.validated_data["topic"]))
+    return q.validated_data
 
 
 def _policies() -> dict[str, Any]:
@@ -67,15 +69,13 @@ def topics_view(request: Request) -> Response:
     if request.method == "PATCH":
         body = s.PoliciesPatch(data=request.data)
         body.is_valid(raise_exception=True)
-        topics = [item["topic"] for item in body.validated_data.get("topics", [])]
-        with transaction.atomic():
-            before, interval = policies_now(topics), default_interval_now()
+        items = body.validated_data.get("topics", [])
+        with (transaction.atomic(), default_interval_audited(user=request.user, source="api"),
+              policies_audited(user=request.user, source="api", topics=[item["topic"] for item in items])):
             if "default_interval_s" in body.validated_data:
                 default_interval_set(seconds=body.validated_data["default_interval_s"])
-            for item in body.validated_data.get("topics", []):
+            for item in items:
                 policy_upsert(**item)
-            audit_policies(user=request.user, source="api", before=before, after=policies_now(topics))
-            audit_default_interval(user=request.user, source="api", before=interval, after=default_interval_now())
     return Response(_policies())
 
 
@@ -86,23 +86,15 @@ def topics_view(request: Request) -> Response:
 def discover_view(request: Request) -> Response:
     body = s.DiscoverIn(data=request.data)
     body.is_valid(raise_exception=True)
-    reply = async_to_sync(acall_service)("rosapi_topics") or {}
-    pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
-    names = [name for name, _ in pairs]
-    before = policies_now(names)
-    added = policies_add_discovered(topics=pairs, mode=body.validated_data["mode"])
-    audit_policies(user=request.user, source="api", before=before, after=policies_now(names))
-    return Response({"discovered": len(pairs), "added": added})
+    discovered, added = policies_discover(user=request.user, source="api", mode=body.validated_data["mode"])
+    return Response({"discovered": discovered, "added": added})
 
 
 @extend_schema(parameters=[s.SeriesIn], responses={200: s.SeriesOut},
                summary="A numeric field over time, downsampled to at most max_points min/max buckets")
 @api_view(["GET"])
 def samples_view(request: Request) -> Response:
-    q = s.SeriesIn(data=request.query_params)
-    q.is_valid(raise_exception=True)
-    v = q.validated_data
-    _refuse_sensitive(request, v["topic"])
+    v = _topic_query(request, s.SeriesIn)
     result = series(topic=v["topic"], field=v["field"], start=v["start"], end=v["end"],
                     max_points=v.get("max_points") or settings.HISTORY_MAX_POINTS)
     return Response(vars(result))
@@ -128,10 +120,7 @@ class ExportView(APIView):
                    summary="Stream a topic's samples as CSV, JSON Lines, MCAP (JSON encoding, opens in Foxglove) "
                            "or, for a recorded audio topic, WAV")
     def get(self, request: Request) -> StreamingHttpResponse:
-        q = s.ExportIn(data=request.query_params)
-        q.is_valid(raise_exception=True)
-        v = q.validated_data
-        _refuse_sensitive(request, v["topic"])
+        v = _topic_query(request, s.ExportIn)
         content_type, ext = FORMATS[v["format"]]
         chunks = EXPORTERS[v["format"]](v["topic"], v["start"], v["end"])
         response = StreamingHttpResponse(_async_chunks(chunks), content_type=content_type)
@@ -159,10 +148,7 @@ def recorded_view(request: Request) -> Response:
                summary="A topic's recorded messages in a range, newest first (text topics: speech, log, state changes)")
 @api_view(["GET"])
 def messages_view(request: Request) -> Response:
-    q = s.MessagesIn(data=request.query_params)
-    q.is_valid(raise_exception=True)
-    v = q.validated_data
-    _refuse_sensitive(request, v["topic"])
+    v = _topic_query(request, s.MessagesIn)
     rows, truncated = recorded_messages(topic=v["topic"], start=v["start"], end=v["end"], limit=v["limit"])
     return Response({"topic": v["topic"], "messages": rows, "truncated": truncated})
 
@@ -171,7 +157,7 @@ def messages_view(request: Request) -> Response:
                summary="Time spent per state-machine state, from recorded state changes")
 @api_view(["GET"])
 def timeline_view(request: Request) -> Response:
-    q = s.RangeIn(data={**request.query_params.dict(), "topic": ri.topic("state_change").name})
+    q = s.TimelineIn(data=request.query_params)
     q.is_valid(raise_exception=True)
     t = state_timeline(start=q.validated_data["start"], end=q.validated_data["end"])
     return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals,

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
+from asgiref.sync import async_to_sync
 from django.conf import settings
 from django.db import transaction
 
 from history.audio import is_audio_type
 from history.models import Mode, RecordingSettings, TopicPolicy
+from history.policy_audit import policies_audited
+from robot.link.bus import acall_service
 
 
 @dataclass(frozen=True)
@@ -71,3 +75,13 @@ def policies_add_discovered(*, topics: Iterable[tuple[str, str]], mode: str = Mo
            for name, msg_type in topics if name not in known]
     TopicPolicy.objects.bulk_create(new, ignore_conflicts=True)
     return [p.topic for p in new]
+
+
+def policies_discover(*, user: Any, source: str, mode: str = Mode.OFF) -> tuple[int, list[str]]:
+    """Add a policy (audited) for every topic the robot reports through /rosapi/topics; returns how
+    many it reported and the names added. A robot that cannot answer raises ``RobotError``."""
+    reply = async_to_sync(acall_service)("rosapi_topics") or {}
+    pairs = list(zip(reply.get("topics", []), reply.get("types", []), strict=False))
+    with policies_audited(user=user, source=source, topics=[name for name, _ in pairs]):
+        added = policies_add_discovered(topics=pairs, mode=mode)
+    return len(pairs), added

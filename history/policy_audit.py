@@ -4,7 +4,8 @@ microphone is a decision about people's voices; the trail says who made it."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from history.models import RecordingSettings, TopicPolicy
@@ -19,9 +20,13 @@ def policies_now(topics: Iterable[str]) -> dict[str, dict[str, Any]]:
             .values("topic", *POLICY_FIELDS)}
 
 
-def audit_policies(*, user: Any, source: str, before: dict[str, dict[str, Any]],
-                   after: dict[str, dict[str, Any]]) -> None:
-    """One audit entry per topic whose policy changed (added, edited or removed)."""
+@contextmanager
+def policies_audited(*, user: Any, source: str, topics: Iterable[str]) -> Iterator[None]:
+    """One audit entry per topic of ``topics`` whose policy the block changed (added, edited or removed)."""
+    names = list(topics)
+    before = policies_now(names)
+    yield
+    after = policies_now(names)
     for topic in sorted(set(before) | set(after)):
         was, now = before.get(topic), after.get(topic)
         if was == now:
@@ -32,11 +37,12 @@ def audit_policies(*, user: Any, source: str, before: dict[str, dict[str, Any]],
                      outcome=f"recording policy of {topic} {what}" + (f": {now['mode']}" if now else ""))
 
 
-def default_interval_now() -> float:
-    return RecordingSettings.load().default_interval_s
-
-
-def audit_default_interval(*, user: Any, source: str, before: float, after: float) -> None:
+@contextmanager
+def default_interval_audited(*, user: Any, source: str) -> Iterator[None]:
+    """An audit entry when the block changed the default interval."""
+    before = RecordingSettings.load().default_interval_s
+    yield
+    after = RecordingSettings.load().default_interval_s
     if before != after:
         audit_record(user=user, source=source, action="history.default_interval", ok=True,
                      params={"from": before, "to": after}, outcome=f"default recording interval {after:g} s")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 from django.http import FileResponse, Http404, HttpResponse
@@ -20,7 +21,7 @@ from history import replay
 from history.access import refused_topics
 from history.frames import frame_file
 from history.incidents import incident_open, incident_release, incident_thumbnail
-from history.mcapexport import incident_mcap
+from history.mcapexport import incident_mcap, topics_in
 from history.models import CameraFrame, Incident
 from robot import interface as ri
 from robot.api.validation import body_object, reject_unknown
@@ -32,6 +33,19 @@ T_PARAM = OpenApiParameter("t", float, description="The moment, in epoch seconds
 def _hidden(request: Request) -> frozenset[str]:
     names = [ri.topic(key).name for key in (*replay.STATE_KEYS, "rosout")]
     return frozenset(refused_topics(request.user, names))
+
+
+def _incident(incident_id: int) -> Incident:
+    incident = Incident.objects.filter(pk=incident_id).first()
+    if incident is None:
+        raise Http404("no such incident")
+    return incident
+
+
+def _immutable_file(path: Path, content_type: str) -> FileResponse:
+    response = FileResponse(path.open("rb"), content_type=content_type)
+    response["Cache-Control"] = "private, max-age=86400, immutable"
+    return response
 
 
 def _time(request: Request, name: str) -> float:
@@ -71,8 +85,7 @@ def frame_view(request: Request, frame_id: int) -> FileResponse:
     frame = CameraFrame.objects.filter(pk=frame_id).first()
     if frame is None or not frame_file(frame).is_file():
         raise Http404("no such frame")
-    response = FileResponse(frame_file(frame).open("rb"), content_type="image/jpeg")
-    response["Cache-Control"] = "private, max-age=86400, immutable"
+    response = _immutable_file(frame_file(frame), "image/jpeg")
     response["X-Frame-Time"] = f"{frame.t:.3f}"
     return response
 
@@ -84,9 +97,7 @@ def map_view(request: Request, sample_id: int) -> FileResponse:
         path = replay.map_png(sample_id)
     except Exception:
         raise Http404("no such map") from None
-    response = FileResponse(path.open("rb"), content_type="image/png")
-    response["Cache-Control"] = "private, max-age=86400, immutable"
-    return response
+    return _immutable_file(path, "image/png")
 
 
 def incident_out(incident: Incident) -> dict[str, Any]:
@@ -123,9 +134,7 @@ def incidents_view(request: Request) -> Response:
 def release_view(request: Request, incident_id: int) -> Response:
     if not is_admin(request.user):
         raise exceptions.PermissionDenied("Only admins may release an incident.")
-    incident = Incident.objects.filter(pk=incident_id).first()
-    if incident is None:
-        raise Http404("no such incident")
+    incident = _incident(incident_id)
     return Response(incident_out(incident_release(incident=incident, by=request.user.get_username())))
 
 
@@ -133,16 +142,9 @@ def release_view(request: Request, incident_id: int) -> Response:
                responses={(200, "application/octet-stream"): bytes})
 @api_view(["GET"])
 def mcap_view(request: Request, incident_id: int) -> HttpResponse:
-    incident = Incident.objects.filter(pk=incident_id).first()
-    if incident is None:
-        raise Http404("no such incident")
-    data = incident_mcap(incident, hidden=frozenset(refused_topics(request.user, _recorded_topics(incident))))
+    incident = _incident(incident_id)
+    hidden = frozenset(refused_topics(request.user, topics_in(incident.start, incident.end)))
+    data = incident_mcap(incident, hidden=hidden)
     response = HttpResponse(data, content_type="application/octet-stream")
     response["Content-Disposition"] = f'attachment; filename="incident-{incident.pk}-{incident.kind}.mcap"'
     return response
-
-
-def _recorded_topics(incident: Incident) -> list[str]:
-    from history.mcapexport import topics_in
-
-    return topics_in(incident.start, incident.end)

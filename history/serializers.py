@@ -44,8 +44,7 @@ def parse_time(value: str, *, name: str) -> datetime:
     return utc(seconds)
 
 
-class RangeIn(serializers.Serializer):
-    topic = serializers.CharField(max_length=255)
+class TimelineIn(serializers.Serializer):
     start = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: an hour before end")
     end = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: now")
 
@@ -55,6 +54,10 @@ class RangeIn(serializers.Serializer):
         if start >= end:
             raise serializers.ValidationError({"start": "start must be before end"})
         return {**attrs, "start": start, "end": end}
+
+
+class RangeIn(TimelineIn):
+    topic = serializers.CharField(max_length=255)
 
 
 class SeriesIn(RangeIn):
@@ -157,20 +160,16 @@ class RecordedOut(serializers.Serializer):
     topics = RecordedTopicOut(many=True)
 
 
-class TimelineSegmentOut(serializers.Serializer):
-    state = serializers.CharField()
-    start = serializers.FloatField(help_text="epoch seconds")
-    end = serializers.FloatField(help_text="epoch seconds")
-
-
 class SpanOut(serializers.Serializer):
     start = serializers.FloatField(help_text="epoch seconds")
     end = serializers.FloatField(help_text="epoch seconds")
 
 
-class TimelineOut(serializers.Serializer):
-    start = serializers.FloatField(help_text="epoch seconds")
-    end = serializers.FloatField(help_text="epoch seconds")
+class TimelineSegmentOut(SpanOut):
+    state = serializers.CharField()
+
+
+class TimelineOut(SpanOut):
     segments = TimelineSegmentOut(many=True)
     totals = serializers.DictField(child=serializers.FloatField(), help_text="Seconds spent per state")
     counts = serializers.DictField(child=serializers.IntegerField(), help_text="Times each state was entered")
@@ -191,7 +190,3 @@ class MessagesOut(serializers.Serializer):
     messages = MessageOut(many=True, help_text="Newest first")
     truncated = serializers.BooleanField(help_text="More messages in the range than limit")
 
-
-class TimelineIn(serializers.Serializer):
-    start = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: an hour before end")
-    end = serializers.CharField(required=False, help_text="ISO 8601 or epoch seconds; default: now")

@@ -27,12 +27,7 @@ def index(request: HttpRequest) -> HttpResponse:
                     "scale": 1, "unit": "", "range": "day", "label": "Emotion (PAD) over time"},
         },
         "state_topic": ri.topic("state_change").name,
-        "urls": {
-            "samples": reverse("history-samples"),
-            "timeline": reverse("history-timeline"),
-            "messages": reverse("history-messages"),
-            "export": reverse("history-export"),
-        },
+        "urls": {name: reverse(f"history-{name}") for name in ("samples", "timeline", "messages", "export")},
     }
     context = {"history_config": config, "can_edit_policies": is_admin(request.user)}
     return render_safe(request, "history/index.html", context)
