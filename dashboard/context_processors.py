@@ -7,10 +7,8 @@ from django.urls import reverse
 from cyborg_site.roles import is_admin, is_operator, role_of
 from dashboard.preferences import theme
 from dashboard.routing import LIVE_SOCKET_PATH
+from robot.api.commands import COMMAND_VIEWS
 from robot.commands.latch import latch
-
-# The command API views the pages' command buttons post to, by their data-command name.
-COMMAND_NAMES = ("mode", "event", "speech", "emotion", "emotion-system", "motors", "playback", "dome")
 
 
 def roles(request: HttpRequest) -> dict[str, Any]:
@@ -43,6 +41,7 @@ def site_config(request: HttpRequest) -> dict[str, Any]:
                 "estop_release": reverse("robot-estop-release"),
                 "theme": reverse("api-theme"),
             },
-            "commands": {name: reverse(f"api-robot-{name}") for name in COMMAND_NAMES},
+            # The command API views the pages' command buttons post to, by their data-command name.
+            "commands": {name: reverse(f"api-robot-{name}") for name in COMMAND_VIEWS},
         },
     }

@@ -12,24 +12,14 @@ from robot.alerts.choices import alert_choice, alert_choice_set, push_subscribe,
 from robot.alerts.selectors import alerts_history, alerts_on
 from robot.alerts.services import alert_acknowledge, atell_raiser
 from robot.api.base import robot_api_view
-from robot.api.common import error_responses
+from robot.api.common import error_responses, same, shape
 from robot.api.validation import body_object
 
-
-class AlertOut(serializers.Serializer):
-    id = serializers.CharField()
-    key = serializers.CharField()
-    kind = serializers.CharField()
-    severity = serializers.CharField()
-    text = serializers.CharField()
-    started_at = serializers.FloatField(help_text="epoch seconds")
-    updated_at = serializers.FloatField()
-    ended_at = serializers.FloatField(allow_null=True)
-    count = serializers.IntegerField()
-    acked_by = serializers.CharField()
-    acked_at = serializers.FloatField(allow_null=True)
-
-
+AlertOut = shape(
+    "AlertOut", **same(serializers.CharField, "id", "key", "kind", "severity", "text"),
+    started_at=serializers.FloatField(help_text="epoch seconds"), updated_at=serializers.FloatField(),
+    ended_at=serializers.FloatField(allow_null=True), count=serializers.IntegerField(),
+    acked_by=serializers.CharField(), acked_at=serializers.FloatField(allow_null=True))
 Alerts = inline_serializer(name="Alerts", fields={"on": AlertOut(many=True), "history": AlertOut(many=True)})
 
 
@@ -50,13 +40,12 @@ def acknowledge_view(request: Request, alert_id: str) -> Response:
     return Response(alert)
 
 
-Choice = inline_serializer(name="AlertChoice", fields={
-    "by_email": serializers.BooleanField(), "by_push": serializers.BooleanField(),
-    "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField()})
+_CHOICE = {**same(serializers.BooleanField, "by_email", "by_push"),
+           "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField()}
+Choice = inline_serializer(name="AlertChoice", fields=dict(_CHOICE))  # (DRF takes the fields out of the dict)
 ChoiceOut = inline_serializer(name="AlertChoiceOut", fields={
-    "by_email": serializers.BooleanField(), "by_push": serializers.BooleanField(),
-    "kinds": serializers.ListField(child=serializers.CharField()), "min_severity": serializers.CharField(),
-    "email": serializers.CharField(), "kinds_available": serializers.DictField(child=serializers.CharField()),
+    **_CHOICE, "email": serializers.CharField(),
+    "kinds_available": serializers.DictField(child=serializers.CharField()),
     "push_public_key": serializers.CharField(help_text="the VAPID applicationServerKey (base64url)"),
     "push_browsers": serializers.IntegerField()})
 

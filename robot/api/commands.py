@@ -13,7 +13,6 @@ from drf_spectacular.utils import extend_schema, inline_serializer
 from rest_framework import serializers
 from rest_framework.request import Request
 from rest_framework.response import Response
-from rest_framework.views import APIView
 
 from robot.api.base import CommandAPIView, run
 from robot.api.common import error_responses
@@ -45,46 +44,49 @@ class FieldCommandView(CommandAPIView):
         return Response({"ok": True, "action": self.action_name, "outcome": outcome})
 
 
-def _command_view(name: str, *, action: str, field: str, command: Callable[[Any, Any], Command], summary: str,
-                  description: str, input_field: serializers.Field, errors: tuple[int, ...] = ()) -> type[APIView]:
-    """One view per command: the class, and its OpenAPI description."""
-    view = type(name, (FieldCommandView,), {"action_name": action, "field": field, "command": staticmethod(command),
-                                        "__doc__": description})
+def _command_view(name: str, *, field: str, command: Callable[[Any, Any], Command], summary: str, description: str,
+                  input_field: serializers.Field, errors: tuple[int, ...] = ()) -> type[FieldCommandView]:
+    """One view per command, ``POST /api/robot/<name>/``: the class, and its OpenAPI description."""
+    title = "".join(part.title() for part in name.split("-"))  # "emotion-system": EmotionSystemView
+    view = type(f"{title}View", (FieldCommandView,), {"action_name": name.replace("-", "_"), "field": field,
+                                                      "command": staticmethod(command), "__doc__": description})
     return extend_schema(
         summary=summary, description=description, tags=["commands"],
-        request=inline_serializer(f"{name.removesuffix('View')}In", {field: input_field}),
+        request=inline_serializer(f"{title}In", {field: input_field}),
         responses={200: CommandOut, **error_responses(400, 401, 403, 409, 429, 503, 504, *errors)},
     )(view)
 
 
-ModeView = _command_view(
-    "ModeView", action="mode", field="mode", summary="Change mode",
-    command=lambda mode, user: modes.change_mode(mode, user=user),
-    description="Behaviour, Demo, Manual or Stop. With `MODE_COMMANDER=server` the server runs the commander's "
-                "sequence itself; with `robot` it publishes the mode on `robot_mode`. One change at a time (409).",
-    input_field=serializers.ChoiceField(choices=MODE_NAMES))
-EventView = _command_view(
-    "EventView", action="event", field="event", command=_value_only(tool.send_event), summary="Send event",
-    description="Register a state machine event (see `available_events` in the robot state).",
-    input_field=serializers.RegexField(r"^[A-Za-z0-9_]+$", max_length=EVENT_MAX))
-SpeechView = _command_view(
-    "SpeechView", action="speech", field="text", command=_value_only(tool.say), summary="Speak",
-    description="Text to speech (trimmed, 1-500 characters); requests queue on the robot.",
-    input_field=serializers.CharField(max_length=SPEECH_MAX))
-EmotionView = _command_view(
-    "EmotionView", action="emotion", field="emotion", command=_value_only(tool.set_emotion), summary="Set emotion",
-    description="One of the emotion presets (managed in the admin).", input_field=serializers.CharField())
-EmotionSystemView = _command_view(
-    "EmotionSystemView", action="emotion_system", field="on", command=_value_only(tool.set_emotion_system),
-    summary="Emotion system", description="Switch the emotion system on or off.",
-    input_field=serializers.BooleanField())
-MotorsView = _command_view(
-    "MotorsView", action="motors", field="enabled", command=_value_only(motors.set_motors), summary="Motors",
-    description="Enable or disable the motors through the RosAria services; 502 carries the service's error.",
-    input_field=serializers.BooleanField(), errors=(502,))
-PlaybackView = _command_view(
-    "PlaybackView", action="playback", field="clip", command=_value_only(tool.play_clip), summary="Play sound",
-    description="Play one of the sound clips (managed in the admin).", input_field=serializers.CharField())
-DomeView = _command_view(
-    "DomeView", action="dome", field="mode", command=_value_only(tool.set_dome), summary="Dome mode",
-    description="Set the LED dome's visual mode (managed in the admin).", input_field=serializers.CharField())
+# The command views by name: the URL path and name ("api-robot-<name>") and the pages' data-command.
+COMMAND_VIEWS = {view.action_name.replace("_", "-"): view for view in (
+    _command_view(
+        "mode", field="mode", summary="Change mode",
+        command=lambda mode, user: modes.change_mode(mode, user=user),
+        description="Behaviour, Demo, Manual or Stop. With `MODE_COMMANDER=server` the server runs the commander's "
+                    "sequence itself; with `robot` it publishes the mode on `robot_mode`. One change at a time (409).",
+        input_field=serializers.ChoiceField(choices=MODE_NAMES)),
+    _command_view(
+        "event", field="event", command=_value_only(tool.send_event), summary="Send event",
+        description="Register a state machine event (see `available_events` in the robot state).",
+        input_field=serializers.RegexField(r"^[A-Za-z0-9_]+$", max_length=EVENT_MAX)),
+    _command_view(
+        "speech", field="text", command=_value_only(tool.say), summary="Speak",
+        description="Text to speech (trimmed, 1-500 characters); requests queue on the robot.",
+        input_field=serializers.CharField(max_length=SPEECH_MAX)),
+    _command_view(
+        "emotion", field="emotion", command=_value_only(tool.set_emotion), summary="Set emotion",
+        description="One of the emotion presets (managed in the admin).", input_field=serializers.CharField()),
+    _command_view(
+        "emotion-system", field="on", command=_value_only(tool.set_emotion_system), summary="Emotion system",
+        description="Switch the emotion system on or off.", input_field=serializers.BooleanField()),
+    _command_view(
+        "motors", field="enabled", command=_value_only(motors.set_motors), summary="Motors",
+        description="Enable or disable the motors through the RosAria services; 502 carries the service's error.",
+        input_field=serializers.BooleanField(), errors=(502,)),
+    _command_view(
+        "playback", field="clip", command=_value_only(tool.play_clip), summary="Play sound",
+        description="Play one of the sound clips (managed in the admin).", input_field=serializers.CharField()),
+    _command_view(
+        "dome", field="mode", command=_value_only(tool.set_dome), summary="Dome mode",
+        description="Set the LED dome's visual mode (managed in the admin).", input_field=serializers.CharField()),
+)}

@@ -1,6 +1,8 @@
-"""The error shape every robot API view documents in the OpenAPI schema."""
+"""What the robot API views document in the OpenAPI schema: the one error shape, and shapes of answers."""
 
 from __future__ import annotations
+
+from typing import Any
 
 from drf_spectacular.utils import OpenApiResponse, inline_serializer
 from rest_framework import serializers
@@ -29,3 +31,13 @@ def error_responses(*codes: int) -> dict[int, OpenApiResponse]:
         504: "The robot did not answer in time.",
     }
     return {code: OpenApiResponse(ErrorOut, description=meaning[code]) for code in codes}
+
+
+def shape(name: str, /, **fields: serializers.Field) -> type[serializers.Serializer]:
+    """An answer's shape for the schema: a serializer class (nestable, ``many=True``) that only documents."""
+    return type(name, (serializers.Serializer,), fields)
+
+
+def same(kind: type[serializers.Field], *names: str, **options: Any) -> dict[str, serializers.Field]:
+    """Several fields of one kind: ``shape("Point", **same(serializers.FloatField, "x", "y"))``."""
+    return {name: kind(**options) for name in names}

@@ -82,8 +82,6 @@ def bad_request_detail(exc: BaseException | None) -> tuple[str, str]:
         return f"Request body too large (at most {limit} bytes).", "too_large"
     if isinstance(exc, TooManyFieldsSent):
         return "Too many form fields.", "too_large"
-    if isinstance(exc, SuspiciousOperation):
-        return "Bad request.", "bad_request"
     return "Bad request.", "bad_request"
 
 

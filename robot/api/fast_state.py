@@ -94,13 +94,6 @@ async def renew_token_trust(authorization: bytes) -> None:
         await CachedTokenAuthentication.arenew(key)
 
 
-def _authorization(scope: dict[str, Any]) -> bytes:
-    for name, value in scope["headers"]:
-        if name == b"authorization":
-            return value
-    return b""
-
-
 class FastStateApp:
     """ASGI: the state of a cached token's caller, without Django's handler; the rest to ``django_app``."""
 
@@ -117,7 +110,7 @@ class FastStateApp:
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
-            await renew_token_trust(_authorization(scope))
+            await renew_token_trust(dict(scope["headers"]).get(b"authorization", b""))
             headers = self.response_headers(scope)
             if headers is not None:
                 body = self._renderer.render(await arobot_state())

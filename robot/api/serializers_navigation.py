@@ -7,6 +7,7 @@ from typing import Any
 from asgiref.sync import async_to_sync
 from rest_framework import serializers
 
+from robot.api.common import same, shape
 from robot.api.validation import reject_unknown
 from robot.models import Location
 from robot.navigation.locations import acurrent_pose
@@ -26,53 +27,22 @@ class PoseInput(serializers.Serializer):
                                  help_text="heading in radians within (-2π, 2π] (0 = +x, CCW)")
 
 
-class MapOrigin(serializers.Serializer):
-    x = serializers.FloatField()
-    y = serializers.FloatField()
-    yaw = serializers.FloatField()
-
-
-class MapMeta(serializers.Serializer):
-    version = serializers.CharField()
-    width = serializers.IntegerField(help_text="cells")
-    height = serializers.IntegerField(help_text="cells")
-    resolution = serializers.FloatField(help_text="metres per cell")
-    origin = MapOrigin(help_text="map position of the grid's bottom-left corner")
-    frame = serializers.CharField()
-    image_url = serializers.CharField()
-    received = serializers.FloatField(help_text="epoch seconds")
-
-
-class Goal(serializers.Serializer):
-    id = serializers.CharField()
-    action = serializers.CharField(help_text="move_base or navigation")
-    x = serializers.FloatField()
-    y = serializers.FloatField()
-    yaw = serializers.FloatField()
-    location = serializers.CharField(allow_null=True)
-    by = serializers.CharField()
-    sent = serializers.FloatField()
-    status = serializers.CharField(help_text="pending, active, succeeded, aborted, cancelled, cancelling, …")
-    status_text = serializers.CharField()
-
-
-class RobotPose(serializers.Serializer):
-    x = serializers.FloatField()
-    y = serializers.FloatField()
-    yaw = serializers.FloatField()
-
-
-class InitialPoseResult(serializers.Serializer):
-    detail = serializers.CharField()
-    pose = RobotPose()
-
-
-class NavigationStatus(serializers.Serializer):
-    goal = Goal(allow_null=True)
-    robot_pose = RobotPose(allow_null=True)
-    current_location = serializers.CharField(allow_null=True)
-    map_version = serializers.CharField(allow_null=True)
-    backend = serializers.CharField()
+Pose = shape("RobotPose", **same(serializers.FloatField, "x", "y", "yaw"))
+MapMeta = shape(
+    "MapMeta", version=serializers.CharField(), **same(serializers.IntegerField, "width", "height", help_text="cells"),
+    resolution=serializers.FloatField(help_text="metres per cell"),
+    origin=Pose(help_text="map position of the grid's bottom-left corner"), frame=serializers.CharField(),
+    image_url=serializers.CharField(), received=serializers.FloatField(help_text="epoch seconds"))
+Goal = shape(
+    "Goal", **same(serializers.CharField, "id", "by", "status_text"),
+    action=serializers.CharField(help_text="move_base or navigation"),
+    **same(serializers.FloatField, "x", "y", "yaw", "sent"),
+    location=serializers.CharField(allow_null=True),
+    status=serializers.CharField(help_text="pending, active, succeeded, aborted, cancelled, cancelling, …"))
+InitialPoseResult = shape("InitialPoseResult", detail=serializers.CharField(), pose=Pose())
+NavigationStatus = shape(
+    "NavigationStatus", goal=Goal(allow_null=True), robot_pose=Pose(allow_null=True),
+    **same(serializers.CharField, "current_location", "map_version", allow_null=True), backend=serializers.CharField())
 
 
 class LocationSerializer(serializers.ModelSerializer):

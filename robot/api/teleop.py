@@ -14,50 +14,37 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, run
-from robot.api.common import error_responses
+from robot.api.common import error_responses, shape
 from robot.api.estop_access import EstopAccessMixin
 from robot.commands.latch import alatch
 from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
 
-
-class EstopStepSerializer(serializers.Serializer):
-    step = serializers.ChoiceField(choices=["latch", *(name for name, _ in STEPS)])
-    ok = serializers.BooleanField()
-    detail = serializers.CharField()
-
-
-class EstopOutputSerializer(serializers.Serializer):
-    ok = serializers.BooleanField()
-    steps = EstopStepSerializer(many=True)
-    latch = serializers.DictField(help_text="The latch as every page sees it (see GET).")
-    detail = serializers.CharField(required=False, help_text="Only when a step failed.")
-    code = serializers.CharField(required=False, help_text="'partial' when a step failed.")
-
-
-class LatchSerializer(serializers.Serializer):
-    latched = serializers.BooleanField()
-    by = serializers.CharField(help_text="Who pressed it.")
-    at = serializers.FloatField(help_text="When (epoch seconds).")
-    at_text = serializers.CharField()
-    message = serializers.CharField(help_text='"E-STOP engaged by NAME at TIME" while latched.')
-    steps = EstopStepSerializer(many=True, help_text="What each step of the stop did.")
-    released_by = serializers.CharField()
-    released_at = serializers.FloatField()
-
-
-class ReleaseInputSerializer(serializers.Serializer):
-    confirm = serializers.BooleanField(help_text="Must be true: releasing lets the robot be driven again.")
+EstopStep = shape("EstopStep", step=serializers.ChoiceField(choices=["latch", *(name for name, _ in STEPS)]),
+                  ok=serializers.BooleanField(), detail=serializers.CharField())
+EstopOutput = shape(
+    "EstopOutput", ok=serializers.BooleanField(), steps=EstopStep(many=True),
+    latch=serializers.DictField(help_text="The latch as every page sees it (see GET)."),
+    detail=serializers.CharField(required=False, help_text="Only when a step failed."),
+    code=serializers.CharField(required=False, help_text="'partial' when a step failed."))
+Latch = shape(
+    "Latch", latched=serializers.BooleanField(), by=serializers.CharField(help_text="Who pressed it."),
+    at=serializers.FloatField(help_text="When (epoch seconds)."), at_text=serializers.CharField(),
+    message=serializers.CharField(help_text='"E-STOP engaged by NAME at TIME" while latched.'),
+    steps=EstopStep(many=True, help_text="What each step of the stop did."),
+    released_by=serializers.CharField(), released_at=serializers.FloatField())
+ReleaseInput = shape("ReleaseInput", confirm=serializers.BooleanField(
+    help_text="Must be true: releasing lets the robot be driven again."))
 
 
 class EstopView(EstopAccessMixin, RobotAPIView):  # never throttled: a stop always goes through
 
-    @extend_schema(responses={200: LatchSerializer}, summary="E-STOP state")
+    @extend_schema(responses={200: Latch}, summary="E-STOP state")
     def get(self, request: Request) -> Response:
         return Response(async_to_sync(alatch)().as_msg())
 
     @extend_schema(
         request=None,
-        responses={200: EstopOutputSerializer, 502: EstopOutputSerializer, **error_responses(401, 403)},
+        responses={200: EstopOutput, 502: EstopOutput, **error_responses(401, 403)},
         summary="Emergency stop",
         description="Latch the stop, then: zero velocity (held for a moment, further motion refused), free and "
         "block the drive lock, cancel all navigation goals, disable the motors and switch to mode stop. Every step "
@@ -81,8 +68,8 @@ class EstopView(EstopAccessMixin, RobotAPIView):  # never throttled: a stop alwa
 class EstopReleaseView(EstopAccessMixin, RobotAPIView):
 
     @extend_schema(
-        request=ReleaseInputSerializer,
-        responses={200: LatchSerializer, **error_responses(400, 401, 403)},
+        request=ReleaseInput,
+        responses={200: Latch, **error_responses(400, 401, 403)},
         summary="Release the E-STOP",
         description="An operator's explicit release, with confirm=true; audited. The motors stay off until "
         "someone turns them on.",

@@ -94,13 +94,6 @@ class CachedTokenAuthentication(TokenAuthentication):
         finally:
             connection.close()  # this pool thread's own: none is left open between renewals
 
-    @classmethod
-    def cached(cls, request: Any) -> bool:
-        """Whether the request's token is known without asking the database."""
-        scheme, _, key = request.META.get("HTTP_AUTHORIZATION", "").partition(" ")
-        hit = cls._cache.get(key.strip()) if scheme.lower() == cls.keyword.lower() else None
-        return hit is not None and hit[0] > time.monotonic()
-
 
 @receiver(post_delete, sender=Token)
 def _forget_deleted_token(sender: type, instance: Token, **kwargs: Any) -> None:

@@ -12,7 +12,7 @@ from rest_framework.response import Response
 
 from robot import interface as ri
 from robot.api.base import robot_api_view
-from robot.api.common import error_responses
+from robot.api.common import error_responses, same, shape
 from robot.link.bus import arequest
 from robot.link.watching import RATE_WINDOW_S
 
@@ -36,12 +36,11 @@ class RateIn(serializers.Serializer):
         return value
 
 
-class TopicOut(serializers.Serializer):
-    name = serializers.CharField()
-    type = serializers.CharField()
-    publishers = serializers.ListField(child=serializers.CharField(), allow_null=True,
-                                       help_text="Nodes publishing it (null: the robot's rosapi cannot say).")
-    subscribed = serializers.BooleanField(help_text="The server holds a subscription to it now.")
+TopicOut = shape(
+    "TopicOut", **same(serializers.CharField, "name", "type"),
+    publishers=serializers.ListField(child=serializers.CharField(), allow_null=True,
+                                     help_text="Nodes publishing it (null: the robot's rosapi cannot say)."),
+    subscribed=serializers.BooleanField(help_text="The server holds a subscription to it now."))
 
 
 

@@ -17,14 +17,8 @@ router.register("locations", navigation.LocationViewSet, basename="api-location"
 urlpatterns = [
     path("auth/token/", TokenView.as_view(), name="api-token"),
     path("robot/state/", RobotStateView.as_view(), name="api-robot-state"),
-    path("robot/mode/", commands.ModeView.as_view(), name="api-robot-mode"),
-    path("robot/event/", commands.EventView.as_view(), name="api-robot-event"),
-    path("robot/speech/", commands.SpeechView.as_view(), name="api-robot-speech"),
-    path("robot/emotion/", commands.EmotionView.as_view(), name="api-robot-emotion"),
-    path("robot/emotion-system/", commands.EmotionSystemView.as_view(), name="api-robot-emotion-system"),
-    path("robot/motors/", commands.MotorsView.as_view(), name="api-robot-motors"),
-    path("robot/playback/", commands.PlaybackView.as_view(), name="api-robot-playback"),
-    path("robot/dome/", commands.DomeView.as_view(), name="api-robot-dome"),
+    *(path(f"robot/{name}/", view.as_view(), name=f"api-robot-{name}")
+      for name, view in commands.COMMAND_VIEWS.items()),
     path("robot/estop/", EstopView.as_view(), name="robot-estop"),
     path("robot/estop/release/", EstopReleaseView.as_view(), name="robot-estop-release"),
     path("audit/", AuditListView.as_view(), name="api-audit"),
