@@ -44,10 +44,6 @@ class CountRequests:
             _in_flight -= 1
 
 
-def in_flight() -> int:
-    return _in_flight
-
-
 def daphne_reactor() -> Any | None:
     """Twisted's reactor when this process is the Daphne server on asyncio, else None."""
     # Importing Daphne installs its reactor everywhere (tests too); only its server entry

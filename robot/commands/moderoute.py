@@ -47,15 +47,6 @@ def way_out(state: str) -> Step | None:
     return Step(ri.Event.ABORTED, state, IDLE)
 
 
-def way_to_suspension(state: str) -> list[Step]:
-    """Every step from ``state`` to suspension, assuming nothing else moves the state machine."""
-    steps: list[Step] = []
-    while (step := way_out(state)) is not None and step.to_state:
-        steps.append(step)
-        state = step.to_state
-    return steps
-
-
 def way_in(mode: ri.Mode) -> Step | None:
     """The step from suspension into ``mode``; None for stop (suspension is its target)."""
     event = ri.MODE_ENTRY[mode][1]

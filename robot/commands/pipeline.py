@@ -198,10 +198,3 @@ async def arun_command(
         return await run()
 
     return await arun(Command(action, params, send, allowed=allowed, refusal=refusal), user=user, source=source)
-
-
-async def arecord_invalid(*, user: Any, source: str, action: str, params: dict[str, Any], error: str) -> None:
-    """Audit a command refused for bad input (nothing was sent)."""
-    await _record(
-        user=user, source=source, action=action, params=params, ok=False, outcome=error, error_code="invalid"
-    )

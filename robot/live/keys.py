@@ -58,8 +58,6 @@ MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location", "bumper_state", *NAVI
 DRIVE_KEYS = ("odom", "robot_pose", "motors_state")
 # The map page's overlays, each switched on and off by the operator (dashboard.preferences).
 MAP_OVERLAY_KEYS = tuple(OVERLAY_SOURCES)
-# Every page's header: the alert strip and the battery.
-HEADER_KEYS = (ALERTS_KEY, "battery_soc")
 # What the state API reports.
 STATE_KEYS = HOME_KEYS
 

@@ -128,10 +128,6 @@ def reset_store() -> None:
     _store = None
 
 
-def entry_age(entry: dict[str, Any], now: float | None = None) -> float:
-    return (now or time.time()) - float(entry.get("t", 0))
-
-
 def link_status(store: StateStore | None = None) -> dict[str, Any]:
     """The link's last reported status; offline when the link has not reported recently."""
     status = (store or get_store()).get_all().get(STATUS_KEY)

@@ -132,12 +132,6 @@ def goal_cancel() -> Command:
     return command
 
 
-async def agoal_cancel(*, user: Any, source: str) -> dict[str, Any]:
-    command = goal_cancel()
-    outcome = await arun(command, user=user, source=source)
-    return {"detail": outcome, **command.result}
-
-
 def initial_pose_set(*, data: dict[str, Any]) -> Command:
     """Publish /initialpose (the robot re-localises there); unexplored cells are allowed, obstacles not.
     ``result`` is the pose sent."""
@@ -153,9 +147,3 @@ def initial_pose_set(*, data: dict[str, Any]) -> Command:
     params = audit_params(**{k: data.get(k) for k in ("x", "y", "yaw")})
     command = Command("navigation.initial_pose", params, send, check=lambda: _pose(data))
     return command
-
-
-async def ainitial_pose_set(*, user: Any, source: str, data: dict[str, Any]) -> dict[str, Any]:
-    command = initial_pose_set(data=data)
-    outcome = await arun(command, user=user, source=source)
-    return {"detail": outcome, "pose": command.result}

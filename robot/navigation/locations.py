@@ -6,7 +6,7 @@ from typing import Any
 
 from django.conf import settings
 
-from robot.commands.pipeline import Command, InvalidCommand, arun
+from robot.commands.pipeline import Command, InvalidCommand
 from robot.link.bus import RobotError
 from robot.live.announce import aget_state
 from robot.models import Location
@@ -58,9 +58,3 @@ def location_go(*, user: Any, name: str) -> Command:
 
     command = Command("navigation.go_to", {"location": name}, send, check=lambda: _location(name))
     return command
-
-
-async def alocation_go(*, user: Any, source: str, name: str) -> dict[str, Any]:
-    command = location_go(user=user, name=name)
-    await arun(command, user=user, source=source)
-    return command.result
