@@ -16,7 +16,7 @@ def env_str(name: str, default: str = "") -> str:
 
 def env_bool(name: str, default: bool = False) -> bool:
     raw = os.environ.get(name)
-    if raw is None or raw == "":
+    if not raw:
         return default
     value = raw.strip().lower()
     if value in ("1", "true", "yes", "on"):
@@ -26,35 +26,30 @@ def env_bool(name: str, default: bool = False) -> bool:
     raise EnvError(f"{name} must be a boolean (true/false), got {raw!r}")
 
 
-def env_float(name: str, default: float, *, minimum: float | None = None) -> float:
+def _number[N: (int, float)](name: str, default: N, kind: type[N], what: str, minimum: N | None) -> N:
     raw = os.environ.get(name)
-    if raw is None or raw == "":
+    if not raw:
         return default
     try:
-        value = float(raw)
+        value = kind(raw)
     except ValueError:
-        raise EnvError(f"{name} must be a number, got {raw!r}") from None
+        raise EnvError(f"{name} must be {what}, got {raw!r}") from None
     if minimum is not None and value < minimum:
         raise EnvError(f"{name} must be at least {minimum}, got {value}")
     return value
+
+
+def env_float(name: str, default: float, *, minimum: float | None = None) -> float:
+    return _number(name, default, float, "a number", minimum)
 
 
 def env_int(name: str, default: int, *, minimum: int | None = None) -> int:
-    raw = os.environ.get(name)
-    if raw is None or raw == "":
-        return default
-    try:
-        value = int(raw)
-    except ValueError:
-        raise EnvError(f"{name} must be a whole number, got {raw!r}") from None
-    if minimum is not None and value < minimum:
-        raise EnvError(f"{name} must be at least {minimum}, got {value}")
-    return value
+    return _number(name, default, int, "a whole number", minimum)
 
 
 def env_list(name: str, default: list[str]) -> list[str]:
     raw = os.environ.get(name)
-    if raw is None or raw == "":
+    if not raw:
         return default
     return [item.strip() for item in raw.split(",") if item.strip()]
 

@@ -367,17 +367,11 @@ CAMERA_RETENTION_S = env_float("CAMERA_RETENTION_S", 2 * 86400.0, minimum=60)
 # An incident keeps every message of the black box's topics and every camera frame in [t - BEFORE, t + AFTER].
 INCIDENT_BEFORE_S = env_float("INCIDENT_BEFORE_S", 60.0, minimum=1)
 INCIDENT_AFTER_S = env_float("INCIDENT_AFTER_S", 30.0, minimum=1)
+# Each beat job expires just before its next run is due.
 CELERY_BEAT_SCHEDULE = {
-    "history-sample": {
-        "task": "history.sample",
-        "schedule": HISTORY_SAMPLE_TICK_S,
-        "options": {"expires": HISTORY_SAMPLE_TICK_S * 0.9},
-    },
-    "history-prune": {
-        "task": "history.prune",
-        "schedule": HISTORY_PRUNE_EVERY_S,
-        "options": {"expires": HISTORY_PRUNE_EVERY_S * 0.9},
-    },
+    name: {"task": task, "schedule": every_s, "options": {"expires": every_s * 0.9}}
+    for name, task, every_s in (("history-sample", "history.sample", HISTORY_SAMPLE_TICK_S),
+                                ("history-prune", "history.prune", HISTORY_PRUNE_EVERY_S))
 }
 
 # --- API -------------------------------------------------------------------------------
