@@ -94,21 +94,18 @@ class AuditWriter:
         self.down = True
 
     def _replay(self) -> None:
+        """Write the journals; ``down`` says whether the database took them, logged as it changes."""
         try:
             audit_journal.replay()
         except (OperationalError, InterfaceError):
             connection.close()
-            self.down = True
-            log.warning("audit: the database is not reachable; journaled entries wait until it is")
-
-    def _recover(self) -> None:
-        try:
-            audit_journal.replay()
-        except (OperationalError, InterfaceError):
-            connection.close()
+            if not self.down:
+                self.down = True
+                log.warning("audit: the database is not reachable; journaled entries wait until it is")
             return
-        self.down = False
-        log.info("audit: the database is back; commands are accepted again")
+        if self.down:
+            self.down = False
+            log.info("audit: the database is back; commands are accepted again")
 
     def close_connection(self, timeout: float = 10.0) -> None:
         """Close the writer's connection now (e.g. before a test database is dropped)."""
@@ -130,7 +127,7 @@ class AuditWriter:
                 future, fields = self._jobs.get(timeout=PROBE_S if self.down else self.idle_close_s)
             except queue.Empty:
                 if self.down:
-                    self._recover()
+                    self._replay()
                 else:
                     connection.close()
                 continue
@@ -139,10 +136,7 @@ class AuditWriter:
                 _settle(future)
                 continue
             if fields is _REPLAY:
-                if self.down:
-                    self._recover()
-                else:
-                    self._replay()
+                self._replay()
                 _settle(future)
                 continue
             try:
@@ -166,13 +160,11 @@ class AuditWriter:
 
 
 def _settle(future: Future, *, result: Any = None, exception: BaseException | None = None) -> None:
-    try:
+    with contextlib.suppress(InvalidStateError):  # its caller is gone; the write was made (or logged) all the same
         if exception is not None:
             future.set_exception(exception)
         else:
             future.set_result(result)
-    except InvalidStateError:  # its caller is gone; the write was made (or logged) all the same
-        pass
 
 
 writer = AuditWriter()
