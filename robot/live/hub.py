@@ -134,13 +134,7 @@ class Hub:
     def detach(self, socket: Socket) -> None:
         self.sockets.discard(socket)
         self._dirty.discard(socket)
-        for key in socket.keys:
-            watchers = self._watchers.get(key)
-            if watchers is not None:
-                watchers.discard(socket)
-                if not watchers:
-                    del self._watchers[key]
-        socket.keys.clear()
+        self.unwatch(socket, list(socket.keys))
         socket.pending.clear()
 
     def watch(self, socket: Socket, keys: Iterable[str]) -> None:

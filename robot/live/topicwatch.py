@@ -54,14 +54,14 @@ class LocalWatches:
         except RobotOffline as exc:
             raise TopicRefused("offline", exc.message) from None
         except RobotError as exc:
-            self._forget(watcher, name)
+            _leave(self.watchers, watcher, name)
             raise TopicRefused(exc.code, exc.message) from None
         if name in refused:
-            self._forget(watcher, name)
+            _leave(self.watchers, watcher, name)
             raise TopicRefused(refused[name].get("code", "failed"), refused[name].get("error", "refused"))
 
     async def unwatch(self, watcher: Any, name: str) -> None:
-        if self._forget(watcher, name):
+        if _leave(self.watchers, watcher, name):
             await self._sync_quietly()
 
     async def hold(self, watcher: Any, keys: Iterable[str]) -> None:
@@ -72,7 +72,7 @@ class LocalWatches:
         for key in wanted:
             self.holding.setdefault(key, set()).add(watcher)
         for key in [k for k, watchers in self.holding.items() if k not in wanted and watcher in watchers]:
-            self._release(watcher, key)
+            _leave(self.holding, watcher, key)
         if set(self.holding) - before:
             self._ensure_renewing()
             await self._sync()
@@ -81,31 +81,10 @@ class LocalWatches:
 
     async def drop(self, watcher: Any) -> None:
         """``watcher`` went away: let go of everything it watched and held."""
-        gone = [name for name in list(self.watchers) if self._forget(watcher, name)]
-        released = [key for key in list(self.holding) if self._release(watcher, key)]
+        gone = [name for name in list(self.watchers) if _leave(self.watchers, watcher, name)]
+        released = [key for key in list(self.holding) if _leave(self.holding, watcher, key)]
         if gone or released:
             await self._sync_quietly()
-
-    def _release(self, watcher: Any, key: str) -> bool:
-        """True when ``watcher`` held ``key`` and was the last in this process to."""
-        watchers = self.holding.get(key)
-        if watchers is None or watcher not in watchers:
-            return False
-        watchers.discard(watcher)
-        if not watchers:
-            del self.holding[key]
-        return not watchers
-
-    def _forget(self, watcher: Any, name: str) -> bool:
-        """Remove one watcher; True when that was the topic's last one in this process."""
-        watchers = self.watchers.get(name)
-        if watchers is None or watcher not in watchers:
-            return False
-        watchers.discard(watcher)
-        if watchers:
-            return False
-        del self.watchers[name]
-        return True
 
     async def _sync(self) -> dict[str, dict[str, str]]:
         async with self._lock:
@@ -128,6 +107,18 @@ class LocalWatches:
             await asyncio.sleep(WATCH_RENEW_S)
             if self.watchers or self.holding:
                 await self._sync_quietly()
+
+
+def _leave(table: dict[str, set[Any]], watcher: Any, key: str) -> bool:
+    """Remove ``watcher`` from ``table[key]``; True when it was the last one there in this process."""
+    watchers = table.get(key)
+    if watchers is None or watcher not in watchers:
+        return False
+    watchers.discard(watcher)
+    if watchers:
+        return False
+    del table[key]
+    return True
 
 
 _local: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, LocalWatches] = weakref.WeakKeyDictionary()
