@@ -62,12 +62,9 @@ AUDIT_FILTERS = ("user", "action", "source", "outcome")
 def audit_entries(filters: Mapping[str, str]) -> QuerySet[AuditEntry]:
     """The command log, newest first, narrowed by ?user= &action= &source= &outcome=ok|failed."""
     entries = AuditEntry.objects.all()
-    if user := filters.get("user", "").strip():
-        entries = entries.filter(username=user)
-    if action := filters.get("action", "").strip():
-        entries = entries.filter(action=action)
-    if source := filters.get("source", "").strip():
-        entries = entries.filter(source=source)
+    for name, column in (("user", "username"), ("action", "action"), ("source", "source")):
+        if value := filters.get(name, "").strip():
+            entries = entries.filter(**{column: value})
     outcome = filters.get("outcome", "").strip()
     if outcome in ("ok", "failed"):
         entries = entries.filter(ok=outcome == "ok")

@@ -9,6 +9,7 @@ for goal validation with a memory map instead of decoding the image.
 from __future__ import annotations
 
 import hashlib
+import io
 import os
 import time
 from collections.abc import Callable
@@ -100,18 +101,21 @@ def grid_path(directory: Path, version: str) -> Path:
     return directory / f"{version}.npy"
 
 
-def encode_png(grid: np.ndarray) -> bytes:
-    import io
-
-    pixels = np.ascontiguousarray(np.flipud(grid)).view(np.uint8)
-    image = Image.frombuffer("P", (grid.shape[1], grid.shape[0]), pixels, "raw", "P", 0, 1)
-    image.putpalette(PALETTE)
+def palette_png(cells: np.ndarray, palette: list[int], **options: Any) -> bytes:
+    """Cells (rows top-down, values -1..100) as a palette PNG whose pixel index is the cell value."""
+    pixels = np.ascontiguousarray(cells).view(np.uint8)
+    image = Image.frombuffer("P", (cells.shape[1], cells.shape[0]), pixels, "raw", "P", 0, 1)
+    image.putpalette(palette)
     out = io.BytesIO()
-    image.save(out, "PNG", compress_level=3)
+    image.save(out, "PNG", **options)
     return out.getvalue()
 
 
-def _write_atomically(path: Path, write: Callable[[BinaryIO], object]) -> None:
+def encode_png(grid: np.ndarray) -> bytes:
+    return palette_png(np.flipud(grid), PALETTE, compress_level=3)
+
+
+def write_atomically(path: Path, write: Callable[[BinaryIO], object]) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
         write(f)
@@ -128,9 +132,9 @@ def render_map(msg: dict[str, Any], directory: Path) -> RenderedMap:
     cached = png.exists() and grid_path(directory, version).exists()
     if not cached:
         directory.mkdir(parents=True, exist_ok=True)
-        _write_atomically(grid_path(directory, version), lambda f: np.save(f, grid, allow_pickle=False))
+        write_atomically(grid_path(directory, version), lambda f: np.save(f, grid, allow_pickle=False))
         data = encode_png(grid)
-        _write_atomically(png, lambda f: f.write(data))
+        write_atomically(png, lambda f: f.write(data))
         _prune(directory, keep=version)
     t2 = time.perf_counter()
     return RenderedMap(version, geometry, png, cached, (t1 - t0) * 1000, (t2 - t1) * 1000)

@@ -7,19 +7,15 @@ reports it again after the link restarts)."""
 from __future__ import annotations
 
 import logging
-import math
 from typing import Any
 
 from django.core.exceptions import ValidationError
 
+from robot.navigation.transforms import quaternion_to_yaw
+
 log = logging.getLogger(__name__)
 
 DESCRIPTION = "Named by the robot; placed where it reported being there"
-
-
-def _yaw(orientation: dict[str, Any]) -> float:
-    x, y, z, w = (float(orientation.get(k, 0.0)) for k in ("x", "y", "z", "w"))
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 def location_seed(*, name: str, pose: dict[str, Any]) -> bool:
@@ -29,7 +25,7 @@ def location_seed(*, name: str, pose: dict[str, Any]) -> bool:
     if Location.objects.filter(name=name).exists():
         return False
     location = Location(name=name, x=float(pose["position"]["x"]), y=float(pose["position"]["y"]),
-                        yaw=_yaw(pose.get("orientation") or {}), description=DESCRIPTION)
+                        yaw=quaternion_to_yaw(pose.get("orientation") or {}), description=DESCRIPTION)
     try:
         location.full_clean()
     except ValidationError:

@@ -10,7 +10,6 @@ touches, each under a new revision; a page fetches just those. Tiles are immutab
 
 from __future__ import annotations
 
-import io
 import re
 import shutil
 import time
@@ -20,9 +19,8 @@ from typing import Any
 
 import numpy as np
 from django.conf import settings
-from PIL import Image
 
-from robot.navigation.mapimage import MapError, grid_array, map_version
+from robot.navigation.mapimage import MapError, grid_array, map_version, palette_png, write_atomically
 from robot.navigation.transforms import MapGeometry
 
 TILE = 512
@@ -58,18 +56,7 @@ PALETTE, ALPHA = _palette()
 
 def encode_tile(cells: np.ndarray) -> bytes:
     """One tile (rows top-down, values -1..100) as a palette PNG with per-value transparency."""
-    pixels = np.ascontiguousarray(cells).view(np.uint8)
-    image = Image.frombuffer("P", (cells.shape[1], cells.shape[0]), pixels, "raw", "P", 0, 1)
-    image.putpalette(PALETTE)
-    out = io.BytesIO()
-    image.save(out, "PNG", compress_level=1, transparency=ALPHA)
-    return out.getvalue()
-
-
-def _write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_bytes(data)
-    tmp.replace(path)
+    return palette_png(cells, PALETTE, compress_level=1, transparency=ALPHA)
 
 
 class UpdateError(ValueError):
@@ -102,18 +89,16 @@ class Costmap:
         geometry, grid = grid_array(msg)
         version = map_version(geometry, grid)
         self.geometry, self.frame = geometry, frame
-        if version == self.version:
-            self.render_ms = (time.perf_counter() - t0) * 1000
-            return
-        self.version = version
-        self.image = np.ascontiguousarray(np.flipud(grid))
-        rows, cols = -(-geometry.height // TILE), -(-geometry.width // TILE)
-        self.revisions = np.zeros((rows, cols), np.int64)
-        self.folder.mkdir(parents=True, exist_ok=True)
-        for r in range(rows):
-            for c in range(cols):
-                self._render(r, c)
-        self._prune_versions()
+        if version != self.version:
+            self.version = version
+            self.image = np.ascontiguousarray(np.flipud(grid))
+            rows, cols = -(-geometry.height // TILE), -(-geometry.width // TILE)
+            self.revisions = np.zeros((rows, cols), np.int64)
+            self.folder.mkdir(parents=True, exist_ok=True)
+            for r in range(rows):
+                for c in range(cols):
+                    self._render(r, c)
+            self._prune_versions()
         self.render_ms = (time.perf_counter() - t0) * 1000
 
     def patch(self, update: dict[str, Any]) -> None:
@@ -146,7 +131,8 @@ class Costmap:
 
     def _render(self, row: int, col: int) -> None:
         cells = self.image[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE]
-        _write(self.tile_path(row, col), encode_tile(cells))
+        data = encode_tile(cells)
+        write_atomically(self.tile_path(row, col), lambda f: f.write(data))
 
     def _forget(self, path: Path) -> None:
         # Keep the revision before the one just replaced: a page may still be fetching it.

@@ -46,11 +46,10 @@ SHAPES: dict[str, tuple[str, Shape]] = {
     "footprint": (OVERLAY_FOOTPRINT_KEY, shapes.polygon_points),
     "local_plan": (OVERLAY_LOCAL_PLAN_KEY, shapes.path_points),
 }
-COSTMAPS: dict[str, tuple[str, str]] = {  # layer -> (costmap topic key, updates topic key)
-    "global": ("global_costmap", "global_costmap_updates"),
-    "local": ("local_costmap", "local_costmap_updates"),
+COSTMAPS: dict[str, tuple[str, str, str]] = {  # layer -> (costmap topic key, updates topic key, overlay key)
+    "global": ("global_costmap", "global_costmap_updates", OVERLAY_GLOBAL_COSTMAP_KEY),
+    "local": ("local_costmap", "local_costmap_updates", OVERLAY_LOCAL_COSTMAP_KEY),
 }
-COSTMAP_KEYS = {"global": OVERLAY_GLOBAL_COSTMAP_KEY, "local": OVERLAY_LOCAL_COSTMAP_KEY}
 
 
 class Overlays:
@@ -102,11 +101,7 @@ class Overlays:
     # --- costmaps ----------------------------------------------------------------------
 
     def _lock(self, layer: str) -> asyncio.Lock:
-        key = (asyncio.get_running_loop(), layer)
-        lock = self._locks.get(key)
-        if lock is None:
-            lock = self._locks[key] = asyncio.Lock()
-        return lock
+        return self._locks.setdefault((asyncio.get_running_loop(), layer), asyncio.Lock())
 
     def on_costmap(self, layer: str) -> Callable[[ri.Topic, dict[str, Any], float], Coroutine[Any, Any, None]]:
         async def handle(topic: ri.Topic, msg: dict[str, Any], t: float) -> None:
@@ -148,7 +143,7 @@ class Overlays:
             origin = {"x": round(o.x, 4), "y": round(o.y, 4), "yaw": round(o.yaw, 6)}
         url = reverse("dashboard:costmap-tile", kwargs={"layer": layer, "version": costmap.version, "name": "0-0-0"})
         meta = costmap.meta(origin, url.removesuffix("0-0-0.png"), t)
-        await apublish_state(COSTMAP_KEYS[layer], meta, t)
+        await apublish_state(COSTMAPS[layer][2], meta, t)
 
 
 overlays = Overlays()
@@ -158,7 +153,7 @@ def install() -> None:
     """Route the overlay topics to their handlers (wherever the link may run)."""
     for topic_key in SHAPES:
         register_handler(topic_key, overlays.on_shape)
-    for layer, (costmap_key, updates_key) in COSTMAPS.items():
+    for layer, (costmap_key, updates_key, _) in COSTMAPS.items():
         register_handler(costmap_key, overlays.on_costmap(layer), arrays=True)
         register_handler(updates_key, overlays.on_costmap_update(layer), arrays=True)
     link_module.register_start(_listen_from_the_start)
