@@ -112,21 +112,18 @@ def goal_cancel() -> Command:
     ``result`` is the navigation status afterwards."""
 
     async def send(_: None) -> str:
-        outcome = await _cancel()
-        command.result.update(await anavigation_status())
-        return outcome
-
-    async def _cancel() -> str:
-        status = await anavigation_status()
-        goal = status["goal"]
+        goal = (await anavigation_status())["goal"]
         if goal and goal["status"] not in TERMINAL_STATES:
             await apublish_action(goal["action"], "cancel", cancel_message(goal["id"]))
             stored = (await aget_state(GOAL_KEY)).get(GOAL_KEY) or {}
             if stored.get("id") == goal["id"]:
                 await apublish_state(GOAL_KEY, {**stored, "cancel_requested": True})
-            return f"cancel requested for goal {goal['id']}"
-        await apublish_action("move_base", "cancel", cancel_message())
-        return "no goal of ours under way: cancelled every move_base goal"
+            outcome = f"cancel requested for goal {goal['id']}"
+        else:
+            await apublish_action("move_base", "cancel", cancel_message())
+            outcome = "no goal of ours under way: cancelled every move_base goal"
+        command.result.update(await anavigation_status())
+        return outcome
 
     command = Command("navigation.cancel", {}, send)
     return command

@@ -38,23 +38,20 @@ def location_go(*, user: Any, name: str) -> Command:
     """Send the robot to a named location: a move_base goal at its pose, or by name to the
     robot's own navigation action when ``NAVIGATION_BACKEND`` is ``cyborg_navigation``.
     ``result`` is the goal with its status."""
-    sent: dict[str, Any] = {}
 
     async def send(location: Location) -> str:
-        outcome = await _go(location)
-        command.result.update(goal_view(sent, None) or {})
-        return outcome
-
-    async def _go(location: Location) -> str:
         if settings.NAVIGATION_BACKEND == "cyborg_navigation":
             goal_id = new_goal_id()
-            sent.update(await astart_goal(
+            sent = await astart_goal(
                 action="navigation", msg=navigation_goal_message(goal_id, location.name), goal_id=goal_id,
-                user=user, x=location.x, y=location.y, yaw=location.yaw, location=location.name))
-            return f"goal {goal_id}: {location.name} by name via the robot's navigation"
-        sent.update(await asend_pose_goal(user=user, x=location.x, y=location.y, yaw=location.yaw,
-                                          location=location.name))
-        return f"goal {sent['id']} sent to {location.name} ({location.x:.2f}, {location.y:.2f})"
+                user=user, x=location.x, y=location.y, yaw=location.yaw, location=location.name)
+            outcome = f"goal {goal_id}: {location.name} by name via the robot's navigation"
+        else:
+            sent = await asend_pose_goal(user=user, x=location.x, y=location.y, yaw=location.yaw,
+                                         location=location.name)
+            outcome = f"goal {sent['id']} sent to {location.name} ({location.x:.2f}, {location.y:.2f})"
+        command.result.update(goal_view(sent, None) or {})
+        return outcome
 
     command = Command("navigation.go_to", {"location": name}, send, check=lambda: _location(name))
     return command
