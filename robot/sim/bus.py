@@ -55,6 +55,22 @@ class Node(Protocol):
     def stop(self) -> None: ...
 
 
+class SimNode:
+    """What most nodes leave as it is: no names of their own, nothing published or answered,
+    nothing to stop. ``start`` keeps the bus; a node's own ``start`` calls it first."""
+
+    names: tuple[str, ...] = ()
+    publishes: tuple[str, ...] = ()
+    answers: tuple[str, ...] = ()
+    bus: Bus
+
+    def start(self, bus: Bus) -> None:
+        self.bus = bus
+
+    def stop(self) -> None:
+        """Nothing runs outside the bus: the simulator cancels what ``bus.spawn`` started."""
+
+
 @dataclass
 class Schedule:
     period: float
@@ -156,9 +172,15 @@ class Bus:
 
     # --- clock -----------------------------------------------------------------------------
 
-    def every(self, period_s: float, fn: Callable[[], None]) -> None:
-        """Call ``fn()`` every ``period_s`` seconds of the simulator's tick."""
-        self.clock.schedules.append(Schedule(period_s, fn))
+    def every(self, period_s: float, fn: Callable[[], None], wanted: str | None = None) -> None:
+        """Call ``fn()`` every ``period_s`` seconds of the simulator's tick; with ``wanted`` (a topic
+        key), only while anyone subscribes to it, so a costly message is only built for a listener."""
+
+        def call() -> None:
+            if wanted is None or self.wants(wanted):
+                fn()
+
+        self.clock.schedules.append(Schedule(period_s, call))
 
     def each_tick(self, step: TickFn) -> None:
         """Call ``step(now, dt)`` on every tick, before the periodic publishers."""

@@ -5,13 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 from ..audio import Audio, Microphone, Speaker
-from ..bus import Bus
+from ..bus import Bus, SimNode
 
 
-class AudioVisualNode:
+class AudioVisualNode(SimNode):
     names = ("/cyborg_audio", "/cyborg_visual")
     publishes = ("tts_feedback", "playback_feedback", "audio", "audio_info")
-    answers = ()
 
     def __init__(self, tts_s_per_char: float, tts_min_s: float, clip_s: float, mic_tone_hz: float,
                  mic_coding: str = "wave") -> None:
@@ -20,10 +19,9 @@ class AudioVisualNode:
                               freq_hz=mic_tone_hz, coding=mic_coding)
         self.speaker = Speaker()
         self.dome_mode = "default"
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("text_to_speech", lambda m: self.audio.say(m["data"]))
         bus.on("playback", self._playback)
         bus.on("domecontrol", self._domecontrol)

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .. import messages, world
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from .shapes import body_pose, transform
 
 NODE = "/RosAria"
@@ -20,7 +20,7 @@ def _never() -> bool:
     return False
 
 
-class BaseNode:
+class BaseNode(SimNode):
     names = ("/RosAria", "/robot_pose_publisher")
     publishes = ("robot_pose", "odom", "tf", "tf_static", "sonar", "bumper_state", "battery_soc",
                  "battery_voltage", "battery_recharge_state", "motors_state")
@@ -41,17 +41,16 @@ class BaseNode:
         self.battery_low: Callable[[], bool] = _never
         self._low_battery_fired = False
         self.odom_seq = 0  # header.seq, counted per publisher as roscpp does (a recorder can find gaps)
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("cmd_vel", self._cmd_vel)
         bus.answer("enable_motors", lambda r: self.set_motors(True))
         bus.answer("disable_motors", lambda r: self.set_motors(False))
         bus.each_tick(self._step)
         bus.every(1.0 / self.pose_rate_hz, self._pub_pose)
-        bus.every(1.0 / 25.0, self._pub_tf)
-        bus.every(0.2, self._pub_sonar)
+        bus.every(1.0 / 25.0, self._pub_tf, wanted="tf")
+        bus.every(0.2, self._pub_sonar, wanted="sonar")
         bus.every(0.5, self._pub_bumper)
         bus.every(1.0, self._pub_battery)
         bus.every(1.0, self._pub_motors)
@@ -59,9 +58,6 @@ class BaseNode:
             transform("base_link", "laser", 0.2, 0.0, 0.0),
             transform("base_link", "sonar", SONAR_X, 0.0, 0.0),
         ]})
-
-    def stop(self) -> None:
-        pass
 
     def voltage(self) -> float:
         # A 24 V nominal pack (Pioneer LX): ~23 V empty, ~26 V full, +1.2 V while charging.
@@ -123,8 +119,6 @@ class BaseNode:
             })
 
     def _pub_tf(self) -> None:
-        if not self.bus.wants("tf"):
-            return
         b = self.body
         # map->odom is whatever makes map->odom->base_link equal the true pose.
         dyaw = world.wrap(b.yaw - b.odom_yaw)
@@ -137,8 +131,6 @@ class BaseNode:
         ]})
 
     def _pub_sonar(self) -> None:
-        if not self.bus.wants("sonar"):
-            return
         b = self.body
         # Ranges from the ring itself (the "sonar" frame, SONAR_X ahead of base_link on /tf_static).
         x, y = b.x + SONAR_X * math.cos(b.yaw), b.y + SONAR_X * math.sin(b.yaw)

@@ -7,7 +7,7 @@ import random
 from typing import Any
 
 from .. import messages
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..protocol import ServiceError
 
 NODES = ("/rosapi", "/rosbridge_websocket", "/web_video_server", "/rosout")
@@ -20,7 +20,7 @@ CHATTER = (
 )
 
 
-class BridgeNode:
+class BridgeNode(SimNode):
     names = NODES
     publishes = ("client_count",)
     answers = ("rosapi_topics", "rosapi_topic_type", "rosapi_services", "rosapi_nodes", "rosapi_get_time")
@@ -30,10 +30,9 @@ class BridgeNode:
         self.graph_nodes: list[str] = []  # every node the simulator plays (SimRobot.add fills it in)
         self.params: dict[str, Any] = {"/rosdistro": "noetic", "/use_sim_time": False,
                                        "/robot_description": "Pioneer LX (simulated)"}
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         broker = bus.broker
         bus.declare("/connected_clients", "rosbridge_msgs/ConnectedClients")
         bus.answer("rosapi_topics", lambda r: self._topics())
@@ -51,9 +50,6 @@ class BridgeNode:
         bus.answer_name("/rosapi/message_details", "rosapi/MessageDetails", self._message_details)
         bus.every(8.0, self._chatter)
         self.publish_client_count()
-
-    def stop(self) -> None:
-        pass
 
     def publish_client_count(self) -> None:
         clients = self.bus.broker.clients

@@ -7,29 +7,24 @@ from typing import Any
 
 from robot import interface as ri
 
-from ..bus import Bus
+from ..bus import Bus, SimNode
 
 NODE = "/cyborg_commander"
 
 
-class CommanderNode:
+class CommanderNode(SimNode):
     names = (NODE,)
     publishes = ()  # it announces on the controller's own topics (register_event, emotional_controller)
-    answers = ()
 
     def __init__(self, pause_s: float) -> None:
         self.pause_s = pause_s
         self.mode = ""  # the last robot_mode it ran
         self._queue: asyncio.Queue[str] = asyncio.Queue()
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("robot_mode", self._robot_mode)
         bus.spawn(self._run())
-
-    def stop(self) -> None:
-        pass
 
     def _robot_mode(self, m: dict[str, Any]) -> None:
         self._queue.put_nowait(m["data"])

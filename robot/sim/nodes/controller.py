@@ -12,7 +12,7 @@ from typing import Any
 
 from .. import messages
 from ..actions import SUCCEEDED, Goal
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..statemachine import NAVIGATION_LEAVES, StateMachine
 from .audiovisual import AudioVisualNode
 from .emotion import EmotionNode
@@ -35,10 +35,9 @@ TIMED_BEHAVIOURS = ("show_off_mea", "conveying_emotional_state", "music_horror",
                     "sleepy")
 
 
-class ControllerNode:
+class ControllerNode(SimNode):
     names = (NODE, "/cyborg_behavior", "/cyborg_eventscheduler")
     publishes = ("state_change", "state_transitions", "smach_status", "smach_structure")
-    answers = ()
 
     def __init__(self, rng: random.Random, navigation: NavigationNode, audiovisual: AudioVisualNode,
                  emotion: EmotionNode, startup_s: float, demo_s: float, behaviour_s: float) -> None:
@@ -52,19 +51,15 @@ class ControllerNode:
         self.sm = StateMachine(self._on_state_change)
         self._state_deadline: float | None = None
         self._internal_nav_goal: Goal | None = None
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("register_event", lambda m: self.fire(m["data"]))
         bus.each_tick(self._step)
         bus.every(5.0, self._pub_transitions)
         bus.every(0.5, self._pub_smach_status)
-        bus.every(5.0, self._pub_smach_structure)
+        bus.every(5.0, self._pub_smach_structure, wanted="smach_structure")
         self._on_state_change("", "", self.sm.state)
-
-    def stop(self) -> None:
-        pass
 
     def fire(self, event: str) -> bool:
         before = self.sm.state
@@ -162,8 +157,6 @@ class ControllerNode:
                                               "active_states": active, "local_data": "", "info": ""})
 
     def _pub_smach_structure(self) -> None:
-        if not self.bus.wants("smach_structure"):
-            return
         for path, children, edges, outcomes in self.sm.smach_structure():
             self.bus.publish("smach_structure", {
                 "header": messages.header(), "path": path, "children": children,

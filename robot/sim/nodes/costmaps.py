@@ -9,7 +9,7 @@ from typing import Any
 from robot import interface as ri
 
 from .. import messages
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..costmaps import ODOM_FRAME, Grid, footprint, global_costmap, local_costmap, local_plan
 from ..world import Base, WorldMap, wrap, yaw_to_quaternion
 
@@ -38,7 +38,7 @@ def map_from_odom(b: Base) -> tuple[float, float, float]:
     return b.x - (c * b.odom_x - s * b.odom_y), b.y - (s * b.odom_x + c * b.odom_y), dyaw
 
 
-class CostmapNode:
+class CostmapNode(SimNode):
     """move_base's costmaps, footprint and local plan.
 
     The global costmap goes out whole (latched, so each new subscriber gets it, as costmap_2d
@@ -49,7 +49,6 @@ class CostmapNode:
     names: tuple[str, ...] = ()  # move_base's (the navigation node names /move_base)
     publishes = ("global_costmap", "global_costmap_updates", "local_costmap", "local_costmap_updates",
                  "footprint", "local_plan")
-    answers: tuple[str, ...] = ()
     GLOBAL_UPDATE_M = 4.0  # side of the global costmap window updated around the robot
 
     def __init__(self, body: Base, world_map: WorldMap, navigating: Callable[[], bool]) -> None:
@@ -59,17 +58,13 @@ class CostmapNode:
         self._global: Grid | None = None
         self._local_origin: tuple[float, float] | None = None
         self._planned = False
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.every(1.0, self._pub_global)
         bus.every(0.5, self._pub_local)
-        bus.every(0.2, self._pub_footprint)
+        bus.every(0.2, self._pub_footprint, wanted="footprint")
         bus.every(0.2, self._pub_local_plan)
-
-    def stop(self) -> None:
-        pass
 
     @property
     def global_grid(self) -> Grid:
@@ -110,8 +105,6 @@ class CostmapNode:
             self.bus.publish("local_costmap_updates", update_message(g, ODOM_FRAME, 0, 0, w, h))
 
     def _pub_footprint(self) -> None:
-        if not self.bus.wants("footprint"):
-            return
         b = self.body
         points = [{"x": x, "y": y, "z": 0.0} for x, y in footprint(b.x, b.y, b.yaw)]
         self.bus.publish("footprint", {"header": messages.header(ri.MAP_FRAME), "polygon": {"points": points}})

@@ -15,7 +15,7 @@ from typing import Any
 from robot import interface as ri
 
 from .. import messages, world
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..laser import MOUNT as LASER_MOUNT
 from ..laser import Laser
 from .base import SONAR_X, BaseNode
@@ -114,22 +114,17 @@ def nearest(world_map: world.WorldMap, body: world.Base, mount_x: float, fov: fl
     return min(world_map.raycast(x, y, a, max_m) for a in angles)
 
 
-class DiagnosticsNode:
+class DiagnosticsNode(SimNode):
     names: tuple[str, ...] = ()  # RosAria publishes them (the base node names /RosAria)
     publishes = ("diagnostics",)
-    answers = ()
 
     def __init__(self, base: BaseNode) -> None:
         self.base = base
-        self.bus: Bus
         self.publisher = DiagnosticsPublisher(self.read, lambda msg: self.bus.publish("diagnostics", msg))
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.every(POLL_S, self._poll)
-
-    def stop(self) -> None:
-        pass
 
     def _poll(self) -> None:
         self.publisher.poll(self.bus.clock.now())

@@ -7,32 +7,28 @@ from typing import Any
 
 from robot import interface as ri
 
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..emotions import PAD, EmotionSystem
 
 NODE = "/cyborg_controller"
 
 
-class EmotionNode:
+class EmotionNode(SimNode):
     names = ()  # part of /cyborg_controller (ControllerNode names it)
     publishes = ("emotional_state", "emotion_system_status")
     answers = ("get_emotional_state",)
 
     def __init__(self, rng: random.Random) -> None:
         self.emotions = EmotionSystem(rng, self._on_emotion)
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("emotional_controller", self._emotional_controller)
         bus.on("set_emotional_state", self._set_emotion)
         bus.on("emotional_feedback", self._emotional_feedback)
         bus.answer("get_emotional_state", self._get_emotional_state)
         bus.each_tick(lambda now, dt: self.emotions.drift(dt))
         bus.every(1.0, self._publish)
-
-    def stop(self) -> None:
-        pass
 
     def _emotional_controller(self, m: dict[str, Any]) -> None:
         value = m["data"]

@@ -14,28 +14,23 @@ from typing import Any
 
 from robot import interface as ri
 
-from ..bus import Bus, Node
+from ..bus import Bus, Node, SimNode
 
 BRIDGE = "/rosbridge_websocket"
 
 
-class GraphNode:
+class GraphNode(SimNode):
     names: tuple[str, ...] = ()  # part of /rosapi (the bridge node names it)
-    publishes: tuple[str, ...] = ()
     answers = ("rosapi_publishers", "rosapi_subscribers", "rosapi_node_details")
 
     def __init__(self, nodes: Callable[[], Sequence[Node]]) -> None:
         self.nodes = nodes
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.answer("rosapi_publishers", lambda r: {"publishers": self.publishers(r["topic"])})
         bus.answer("rosapi_subscribers", lambda r: {"subscribers": self.subscribers(r["topic"])})
         bus.answer("rosapi_node_details", lambda r: self.node_details(r["node"]))
-
-    def stop(self) -> None:
-        pass
 
     def _graph_nodes(self) -> list[str]:
         return [name for node in self.nodes() for name in node.names]

@@ -2,31 +2,26 @@
 
 from __future__ import annotations
 
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..laser import Laser
 from ..world import Base, WorldMap
 
 
-class LaserNode:
+class LaserNode(SimNode):
     """RosAria's laser topic: a scan at ``rate_hz`` while anyone subscribes."""
 
     names: tuple[str, ...] = ()  # RosAria publishes it (the base node names /RosAria)
     publishes = ("scan",)
-    answers: tuple[str, ...] = ()
 
     def __init__(self, body: Base, world_map: WorldMap, rate_hz: float = 10.0) -> None:
         self.body = body
         self.world = world_map
         self.rate_hz = rate_hz
         self._laser: Laser | None = None  # built on first use: the distance map costs a moment
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
-        bus.every(1.0 / self.rate_hz, self._publish)
-
-    def stop(self) -> None:
-        pass
+        super().start(bus)
+        bus.every(1.0 / self.rate_hz, self._publish, wanted="scan")
 
     @property
     def laser(self) -> Laser:
@@ -35,8 +30,6 @@ class LaserNode:
         return self._laser
 
     def _publish(self) -> None:
-        if not self.bus.wants("scan"):
-            return
         b = self.body
         msg = self.laser.message(b.x, b.y, b.yaw)
         msg["scan_time"] = 1.0 / self.rate_hz

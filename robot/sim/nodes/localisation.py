@@ -7,39 +7,32 @@ import random
 from robot import interface as ri
 
 from .. import messages
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..localisation import ParticleCloud
 from ..world import Base, yaw_to_quaternion
 
 
-class LocalisationNode:
+class LocalisationNode(SimNode):
     """amcl's particle cloud, published as AMCL does after each filter update."""
 
     names: tuple[str, ...] = ()  # the navigation node names /amcl
     publishes = ("particlecloud",)
-    answers: tuple[str, ...] = ()
 
     def __init__(self, body: Base, rng: random.Random, rate_hz: float = 2.0) -> None:
         self.body = body
         self.cloud = ParticleCloud(rng)
         self.rate_hz = rate_hz
-        self.bus: Bus
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         bus.on("initialpose", lambda m: self.cloud.initial_pose())
         bus.each_tick(self._step)
-        bus.every(1.0 / self.rate_hz, self._publish)
-
-    def stop(self) -> None:
-        pass
+        bus.every(1.0 / self.rate_hz, self._publish, wanted="particlecloud")
 
     def _step(self, now: float, dt: float) -> None:
         self.cloud.step(dt, moving=self.body.v != 0.0 or self.body.w != 0.0)
 
     def _publish(self) -> None:
-        if not self.bus.wants("particlecloud"):
-            return
         b = self.body
         poses = [{"position": {"x": x, "y": y, "z": 0.0}, "orientation": yaw_to_quaternion(yaw)}
                  for x, y, yaw in self.cloud.poses(b.x, b.y, b.yaw)]

@@ -12,17 +12,16 @@ from robot import interface as ri
 
 from .. import messages, world
 from ..actions import ABORTED, ACTIVE, PREEMPTED, SUCCEEDED, ActionServer, Goal
-from ..bus import Bus
+from ..bus import Bus, SimNode
 from ..navigation import Navigator
 from .shapes import body_pose, grid, pose
 
 NAV_NODE = "/cyborg_navigation"
 
 
-class NavigationNode:
+class NavigationNode(SimNode):
     names = ("/amcl", "/map_server", "/move_base", "/cyborg_navigation")
     publishes = ("map", "amcl_pose", "plan", "current_location")
-    answers = ()
 
     def __init__(self, body: world.Base, world_map: world.WorldMap, rng: random.Random, nav_speed: float) -> None:
         self.body = body
@@ -32,7 +31,6 @@ class NavigationNode:
         self.navigator = Navigator(body, max_v=nav_speed)
         self.current_location = ""
         self._map_load_time = messages.stamp()
-        self.bus: Bus
         mb, nav = ri.action("move_base"), ri.action("navigation")
         self.move_base = ActionServer(mb.name, mb.type, self._publish_name, self._move_base_goal,
                                       self._move_base_cancel)
@@ -40,7 +38,7 @@ class NavigationNode:
                                        self._navigation_cancel)
 
     def start(self, bus: Bus) -> None:
-        self.bus = bus
+        super().start(bus)
         for server in (self.move_base, self.navigation):
             for name, msg_type in server.topics.items():
                 bus.declare(name, msg_type)
@@ -50,14 +48,11 @@ class NavigationNode:
         bus.on("move_base_simple_goal", self._simple_goal)
         bus.latch_lazily("map", self._map_message)
         bus.each_tick(self._step)
-        bus.every(0.5, self._pub_amcl)
+        bus.every(0.5, self._pub_amcl, wanted="amcl_pose")
         bus.every(0.2, self._pub_action_status)
         bus.every(1.0, self._pub_plan)
         bus.every(0.2, self._nav_feedback)
         bus.every(1.0, self._pub_location)
-
-    def stop(self) -> None:
-        pass
 
     def _publish_name(self, name: str, msg: dict[str, Any]) -> None:
         self.bus.publish_name(name, msg)
@@ -183,12 +178,11 @@ class NavigationNode:
     # --- periodic publishers ---------------------------------------------------------------
 
     def _pub_amcl(self) -> None:
-        if self.bus.wants("amcl_pose"):
-            cov = [0.0] * 36
-            cov[0] = cov[7] = 0.02
-            cov[35] = 0.01
-            self.bus.publish("amcl_pose", {"header": messages.header(ri.MAP_FRAME),
-                                           "pose": {"pose": body_pose(self.body), "covariance": cov}})
+        cov = [0.0] * 36
+        cov[0] = cov[7] = 0.02
+        cov[35] = 0.01
+        self.bus.publish("amcl_pose", {"header": messages.header(ri.MAP_FRAME),
+                                       "pose": {"pose": body_pose(self.body), "covariance": cov}})
 
     def _pub_action_status(self) -> None:
         for server in (self.move_base, self.navigation):
