@@ -48,10 +48,3 @@ class ParticleCloud:
     def poses(self, x: float, y: float, yaw: float) -> list[tuple[float, float, float]]:
         s, a = self.spread_xy, self.spread_yaw
         return [(x + s * dx, y + s * dy, yaw + a * da) for dx, dy, da in self.offsets]
-
-    def covariance(self) -> list[float]:
-        """amcl_pose's 6 x 6 covariance (x, y, z, rotX, rotY, rotZ) for the current spread."""
-        cov = [0.0] * 36
-        cov[0] = cov[7] = self.spread_xy ** 2
-        cov[35] = self.spread_yaw ** 2
-        return cov

@@ -195,10 +195,6 @@ def known(msg_type: str) -> bool:
     return msg_type in SCHEMAS
 
 
-def service_known(srv_type: str) -> bool:
-    return srv_type in SERVICE_DEFS
-
-
 def stamp(t: float | None = None) -> dict[str, int]:
     t = time.time() if t is None else t
     secs = int(t)

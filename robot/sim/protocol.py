@@ -242,7 +242,6 @@ class Client:
         self._wake = asyncio.Event()
         self.closed = False
         self.fragments: dict[Any, dict[int, str]] = {}
-        self.sent = 0
 
     # --- output ----------------------------------------------------------------------
 
@@ -254,7 +253,6 @@ class Client:
     async def send_now(self, frame: str) -> None:
         if not self.closed:
             await self._send(frame)
-            self.sent += 1
 
     async def run_writer(self) -> None:
         while not self.closed:
@@ -262,7 +260,6 @@ class Client:
             self._wake.clear()
             while self.outbox:
                 await self._send(self.outbox.popleft())
-                self.sent += 1
 
     def reply(self, frame: dict[str, Any]) -> None:
         self.send(messages.encode(frame))

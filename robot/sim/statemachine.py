@@ -52,20 +52,11 @@ TABLE: dict[str, dict[str, str]] = {**TOP, **BEHAVIOUR}
 BEHAVIOUR_STATES = frozenset(BEHAVIOUR)
 
 
-def transitions_of(state: str) -> dict[str, str]:
-    """What ``state_transitions`` publishes: {event: resulting state} of the state entered.
-    Inside the navigation container the container's own name is the observable target."""
-    return dict(TABLE[state])
-
-
 class StateMachine:
     def __init__(self, on_change: Callable[[str, str, str], None], initial: str = "startup") -> None:
         self.state = initial
-        self.previous = ""
-        self.last_event = ""
         self.on_change = on_change
         self.entered_by: str = ""
-        self.history: list[tuple[str, str, str]] = []
 
     @property
     def top(self) -> str:
@@ -84,15 +75,14 @@ class StateMachine:
         target = TABLE[self.state].get(event)
         if target is None:
             return False
-        self.previous, self.state, self.last_event = self.state, target, event
-        self.entered_by = event
-        self.history.append((event, self.previous, target))
-        del self.history[:-100]
-        self.on_change(event, self.previous, target)
+        previous, self.state, self.entered_by = self.state, target, event
+        self.on_change(event, previous, target)
         return True
 
     def transitions_json(self) -> str:
-        return json.dumps(transitions_of(self.state))
+        """What ``state_transitions`` publishes: {event: resulting state} of the state entered.
+        Inside the navigation container the container's own name is the observable target."""
+        return json.dumps(TABLE[self.state])
 
     def smach_status(self) -> list[tuple[str, list[str], list[str]]]:
         """(path, initial_states, active_states) of each active container."""

@@ -22,7 +22,6 @@ class Location:
     y: float
     yaw: float
     threshold: float = 0.5  # m: "at" this location within this radius
-    crowded: bool = False
 
 
 @dataclass
@@ -107,7 +106,7 @@ def glassgarden() -> WorldMap:
     locations = {loc.name: loc for loc in (
         Location("entrance", 0.0, -6.0, math.pi / 2),
         Location("reception", 0.0, -1.0, -math.pi / 2),
-        Location("cafe", -6.5, 5.0, math.pi / 2, crowded=True),
+        Location("cafe", -6.5, 5.0, math.pi / 2),
         Location("meeting_room", 0.0, 5.2, math.pi / 2),
         Location("elevator", 6.5, 5.2, math.pi / 2),
         Location("stage", 6.5, -1.0, 0.0),
@@ -173,7 +172,6 @@ class Planner:
                 shifted[max(dr, 0):h + min(dr, 0), max(dc, 0):w + min(dc, 0)] = \
                     lethal[max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)]
                 inflated |= shifted
-        self.lethal = lethal
         self.cost = np.where(lethal, -1, np.where(inflated, 12, 1)).astype(np.int16)
         self.h, self.w = h, w
 
@@ -264,7 +262,6 @@ class Base:
     odom_x: float = 0.0
     odom_y: float = 0.0
     odom_yaw: float = 0.0
-    distance: float = 0.0
 
     MAX_V = 1.8
     MAX_W = 2.5
@@ -306,7 +303,6 @@ class Base:
         self.odom_x += math.copysign(d, self.v) * math.cos(self.odom_yaw)
         self.odom_y += math.copysign(d, self.v) * math.sin(self.odom_yaw)
         self.x, self.y = nx, ny
-        self.distance += d
         self.bumped = False
         return False
 
