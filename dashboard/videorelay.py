@@ -138,12 +138,11 @@ class TooManyStreams(Exception):
     pass
 
 
+@dataclass(eq=False)
 class VideoRelay:
     """The upstream streams of one event loop, keyed by their parameters."""
 
-    def __init__(self, max_upstreams: int = MAX_UPSTREAMS) -> None:
-        self.upstreams: dict[StreamKey, Upstream] = {}
-        self.max_upstreams = max_upstreams
+    upstreams: dict[StreamKey, Upstream] = field(default_factory=dict)
 
     def viewers(self, person: object = None) -> int:
         return sum(1 for upstream in self.upstreams.values() for viewer in upstream.viewers
@@ -158,7 +157,7 @@ class VideoRelay:
             raise TooManyStreams(f"you already watch the camera {settings.CAMERA_STREAMS_PER_PERSON} times: "
                                  "close a page or tab that shows it")
         key: StreamKey = tuple(sorted((k, str(v)) for k, v in params.items()))
-        if key not in self.upstreams and len(self.upstreams) >= self.max_upstreams:
+        if key not in self.upstreams and len(self.upstreams) >= MAX_UPSTREAMS:
             key = tuple((k, v) for k, v in key if k not in SIZE_PARAMS)
         upstream = self.upstreams.get(key)
         if upstream is None or upstream.task.done():
