@@ -7,6 +7,7 @@ Preset lookups hit the database, so they are async.
 from __future__ import annotations
 
 import re
+from functools import partial
 from typing import Any
 
 from django.db.models import Model
@@ -65,13 +66,7 @@ def _preset(model: type[Model], value: Any, field: str, what: str) -> str:
     return name
 
 
-def clean_emotion(value: Any) -> str:
-    return _preset(EmotionPreset, value, "emotion", "emotion")
-
-
-def clean_clip(value: Any) -> str:
-    return _preset(SoundClip, value, "clip", "sound clip")
-
-
-def clean_dome_mode(value: Any) -> str:
-    return _preset(DomeMode, value, "mode", "dome mode")
+# The presets a command names: each must exist.
+clean_emotion = partial(_preset, EmotionPreset, field="emotion", what="emotion")
+clean_clip = partial(_preset, SoundClip, field="clip", what="sound clip")
+clean_dome_mode = partial(_preset, DomeMode, field="mode", what="dome mode")

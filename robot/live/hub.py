@@ -101,10 +101,16 @@ class Socket:
         if self.tracking is not None:
             self.tracking.setdefault(key, []).append(t)
 
-    def frame(self) -> str:
-        text = batch_frame(self.pending.values())
-        self.pending.clear()
-        return text
+    def take(self) -> list[str | tuple[str, ...]]:
+        """What to write next, and no longer pending: the status frame, then the updates' fragments."""
+        parts: list[str | tuple[str, ...]] = []
+        if self.status is not None:
+            parts.append(self.status)
+            self.status = None
+        if self.pending:
+            parts.append(tuple(self.pending.values()))
+            self.pending.clear()
+        return parts
 
 
 class Hub:
@@ -266,18 +272,10 @@ class Hub:
                 continue
             if backlog < 0:
                 continue  # closing; the consumer detaches it
-            if socket.status is not None:
-                frame = encoded.get(socket.status)
+            for part in socket.take():
+                frame = encoded.get(part)
                 if frame is None:
-                    frame = encoded[socket.status] = ws_text_frame(socket.status)
-                writer.write(frame)
-                socket.status = None
-            if socket.pending:
-                content = tuple(socket.pending.values())
-                frame = encoded.get(content)
-                if frame is None:
-                    frame = encoded[content] = ws_text_frame(batch_frame(content))
-                socket.pending.clear()
+                    frame = encoded[part] = ws_text_frame(_text(part))
                 writer.write(frame)
             written += 1
         dirty.clear()
@@ -293,12 +291,7 @@ class Hub:
 
     async def _write(self, sockets: list[Socket]) -> None:
         for socket in sockets:
-            frames = []
-            if socket.status is not None:
-                frames.append(socket.status)
-                socket.status = None
-            if socket.pending:
-                frames.append(socket.frame())
+            frames = [_text(part) for part in socket.take()]
             socket.sending = True
             try:
                 for frame in frames:
@@ -309,6 +302,11 @@ class Hub:
                 socket.sending = False
         if self._dirty:
             self._schedule()
+
+
+def _text(part: str | tuple[str, ...]) -> str:
+    """A frame's text: the status frame as it is, pending fragments batched."""
+    return part if isinstance(part, str) else batch_frame(part)
 
 
 _hubs: dict[asyncio.AbstractEventLoop, Hub] = {}
