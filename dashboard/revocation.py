@@ -56,14 +56,16 @@ def _deleted(sender: type, instance: Any, **kwargs: Any) -> None:
 @receiver(m2m_changed, sender=get_user_model().groups.through)
 def _groups_changed(sender: type, instance: Any, action: str, reverse: bool, pk_set: set[Any] | None,
                     **kwargs: Any) -> None:
-    if action not in ("post_add", "post_remove", "post_clear"):
-        return
     if not reverse:
-        _tell(instance.pk)
+        if action in ("post_add", "post_remove", "post_clear"):
+            _tell(instance.pk)
+    elif action == "pre_clear":
+        # A group emptied from its side: its members are known only before the clear.
+        instance._members_cleared = list(instance.user_set.values_list("pk", flat=True))
     elif action == "post_clear":
-        for user_id in instance.user_set.values_list("pk", flat=True):
+        for user_id in instance.__dict__.pop("_members_cleared", ()):
             _tell(user_id)
-    else:
+    elif action in ("post_add", "post_remove"):
         for user_id in pk_set or ():
             _tell(user_id)
 

@@ -50,7 +50,7 @@ async def _drive(cookie: bytes, sim):
     return ws
 
 
-@pytest.mark.parametrize("change", ["demoted", "deactivated", "password"])
+@pytest.mark.parametrize("change", ["demoted", "group emptied", "deactivated", "password"])
 async def test_an_access_change_stops_the_driver_and_closes_their_sockets(link, sim, operator, change):
     _, cookie = await database_sync_to_async(_session_of)(operator)
     drive = await _drive(cookie, sim)
@@ -59,6 +59,8 @@ async def test_an_access_change_stops_the_driver_and_closes_their_sockets(link, 
     def revoke() -> None:
         if change == "demoted":
             operator.groups.set([Group.objects.get(name=Role.VIEWER)])
+        elif change == "group emptied":  # from the group's side: Admin → Groups, or a script
+            Group.objects.get(name=Role.OPERATOR).user_set.clear()
         elif change == "deactivated":
             operator.is_active = False
             operator.save()
@@ -68,7 +70,7 @@ async def test_an_access_change_stops_the_driver_and_closes_their_sockets(link, 
 
     before = len(await twists(sim))
     await database_sync_to_async(revoke)()
-    code = 4403 if change == "demoted" else 4401
+    code = 4403 if change in ("demoted", "group emptied") else 4401
     await _closed_with(drive, code)
     await _closed_with(audio, code)
     await wait_twist(sim, is_zero, after=before, what="the driver's zero")
