@@ -160,5 +160,4 @@ def timeline_view(request: Request) -> Response:
     q = s.TimelineIn(data=request.query_params)
     q.is_valid(raise_exception=True)
     t = state_timeline(start=q.validated_data["start"], end=q.validated_data["end"])
-    return Response({"start": t.start, "end": t.end, "segments": t.segments, "totals": t.totals,
-                     "counts": t.counts, "spans": [{"start": lo, "end": hi} for lo, hi in t.spans]})
+    return Response({**vars(t), "spans": [{"start": lo, "end": hi} for lo, hi in t.spans]})

@@ -21,16 +21,16 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from django.conf import settings
 
 from history import camerarec, recorder
+from history.capture import Capture
 from history.incidents import Triggers, incident_open, incidents_to_capture
 from history.models import Incident
-from history.storage import FailureLog, Pending, Row, encode, in_thread, write_batch, write_rows
+from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
 from robot import interface as ri
 from robot.live.keys import LATCH_KEY
 
@@ -45,19 +45,13 @@ ADOPT_EVERY_S = 1.0
 LINK_HOLDER = "blackbox"
 
 
-class BlackBox:
+class BlackBox(Capture[Pending]):
     def __init__(self, *, writer: Callable[[Sequence[Row]], int] = write_rows) -> None:
-        self.writer = writer
+        super().__init__(writer, "writing incident messages")
         self.topics = {ri.topic(key).name: ri.topic(key).type for key in TOPIC_KEYS}
-        self.keep_s = settings.INCIDENT_BEFORE_S + 5.0
-        self.ring: deque[list[Any]] = deque()  # [name, type, msg, t, kept]
-        self.windows: dict[int, tuple[float, float]] = {}
         self.triggers = Triggers()
         self.fired: list[tuple[str, float, str, str]] = []  # (kind, t, summary, by)
-        self._pending: list[Pending] = []
         self._latch_at: float | None = None
-        self._write_log = FailureLog("writing incident messages")
-        self.received = self.stored = self.lost = 0
 
     def _upgraded(self) -> frozenset[str]:
         """The topics recorded every N seconds: those an incident keeps every message of."""
@@ -68,29 +62,25 @@ class BlackBox:
     def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if name not in self.topics:
             return
-        self.received += 1
-        entry = [name, msg_type, msg, t, False]
-        self.ring.append(entry)
-        while self.ring and self.ring[0][3] < t - self.keep_s:
-            self.ring.popleft()
-        if any(start <= t <= end for start, end in self.windows.values()):
+        entry = self._remember(t, (name, msg_type, msg))
+        if self._incident_at(t) is not None:
             self._keep(entry)
         fired = self.triggers.check(name, msg)
         if fired is not None:
             self.fired.append((fired[0], t, fired[1], ""))
 
     def _keep(self, entry: list[Any]) -> None:
-        entry[4] = True
-        if entry[0] in self._upgraded():
-            self._pending.append((entry[0], entry[1], entry[2], entry[3]))
+        entry[2] = True
+        t, (name, msg_type, msg), _ = entry
+        if name in self._upgraded():
+            self._pending.append((name, msg_type, msg, t))
 
     def adopt(self, incident: Incident) -> None:
         if incident.pk in self.windows:
             return
         self.windows[incident.pk] = (incident.start, incident.end)
-        for entry in self.ring:
-            if not entry[4] and incident.start <= entry[3] <= incident.end:
-                self._keep(entry)
+        for entry in self._unkept(incident.start, incident.end):
+            self._keep(entry)
         if camerarec.current is not None:
             camerarec.current.hold(incident.pk, incident.start, incident.end)
 
@@ -116,24 +106,13 @@ class BlackBox:
     async def adopt_open(self) -> None:
         for incident in await in_thread(incidents_to_capture):
             self.adopt(incident)
-        now = time.time()
-        for pk, (_, end) in list(self.windows.items()):
-            if end < now - settings.HISTORY_FLUSH_S:
-                del self.windows[pk]
+        past = time.time() - settings.HISTORY_FLUSH_S
+        self.release_past(past)
         if camerarec.current is not None:
-            camerarec.current.release_past(now - settings.HISTORY_FLUSH_S)
+            camerarec.current.release_past(past)
 
-    async def flush(self) -> int:
-        pending, self._pending = self._pending, []
-        if not pending:
-            return 0
-        rows, _ = encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
-        written = await write_batch(self.writer, rows, self._write_log)
-        if written is None:
-            self.lost += len(pending)
-            return 0
-        self.stored += written
-        return written
+    def _batch(self, pending: list[Pending]) -> list[Row]:
+        return encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)[0]
 
     def subscribe(self, link: Any) -> None:
         for name, msg_type in self.topics.items():

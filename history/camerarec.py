@@ -16,15 +16,15 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import aiohttp
 from django.conf import settings
 
+from history.capture import Capture
 from history.frames import Frame, write_frames
-from history.storage import FailureLog, write_batch
+from history.storage import FailureLog
 
 log = logging.getLogger(__name__)
 
@@ -34,35 +34,21 @@ CONNECT_TIMEOUT_S = 3.0
 READ_TIMEOUT_S = 10.0
 
 
-class CameraRecorder:
+class CameraRecorder(Capture[Frame]):
     def __init__(self, *, writer: Callable[[Sequence[Frame]], int] = write_frames, fps: float | None = None,
                  robot_connected: Callable[[], bool] = lambda: True) -> None:
-        self.writer = writer
+        super().__init__(writer, "writing camera frames")
         self.robot_connected = robot_connected  # no robot, no camera to read: nothing is asked of it
         self.fps = settings.CAMERA_RECORD_FPS if fps is None else fps
-        self.keep_s = settings.INCIDENT_BEFORE_S + 5.0
-        # [t, jpeg, kept]: kept once the frame is on its way to storage.
-        self.ring: deque[list[Any]] = deque()
-        self.windows: dict[int, tuple[float, float]] = {}  # incident id -> (start, end)
         self._last_kept = 0.0
-        self._pending: list[Frame] = []
-        self._write_log = FailureLog("writing camera frames")
-        self.received = self.stored = self.lost = 0
 
     def offer(self, t: float, jpeg: bytes) -> None:
-        self.received += 1
-        entry = [t, jpeg, False]
-        self.ring.append(entry)
-        while self.ring and self.ring[0][0] < t - self.keep_s:
-            self.ring.popleft()
+        entry = self._remember(t, jpeg)
         incident = self._incident_at(t)
         if incident is not None:
             self._keep(entry, incident)
         elif self.fps > 0 and t - self._last_kept >= 1.0 / self.fps * 0.95:
             self._keep(entry, None)
-
-    def _incident_at(self, t: float) -> int | None:
-        return next((i for i, (start, end) in self.windows.items() if start <= t <= end), None)
 
     def _keep(self, entry: list[Any], incident: int | None) -> None:
         entry[2] = True
@@ -73,25 +59,11 @@ class CameraRecorder:
     def hold(self, incident: int, start: float, end: float) -> None:
         """Keep every frame in [start, end] for ``incident``: those in the ring now and those to come."""
         self.windows[incident] = (start, end)
-        for entry in self.ring:
-            if not entry[2] and start <= entry[0] <= end:
-                self._keep(entry, incident)
+        for entry in self._unkept(start, end):
+            self._keep(entry, incident)
 
-    def release_past(self, now: float) -> None:
-        for incident, (_, end) in list(self.windows.items()):
-            if end < now:
-                del self.windows[incident]
-
-    async def flush(self) -> int:
-        pending, self._pending = self._pending, []
-        if not pending:
-            return 0
-        written = await write_batch(self.writer, sorted(pending, key=lambda f: f[0]), self._write_log)
-        if written is None:
-            self.lost += len(pending)
-            return 0
-        self.stored += written
-        return written
+    def _batch(self, pending: list[Frame]) -> list[Frame]:
+        return sorted(pending, key=lambda f: f[0])
 
     async def run(self) -> None:
         pump = asyncio.ensure_future(self._pump_forever())

@@ -103,8 +103,12 @@ def _scan(topic: str, segments: list[str], width: int, lo: int, hi: int) -> dict
     sql, path_params = _sql(segments)
     adapt = connection.ops.adapt_datetimefield_value
     start, end = adapt(utc(lo * width / 1000)), adapt(utc((hi + 1) * width / 1000))
+    return _buckets(sql, [width, *path_params, topic, start, end])
+
+
+def _buckets(sql: str, params: list) -> dict[int, Agg]:
     with connection.cursor() as cursor:
-        cursor.execute(sql, [width, *path_params, topic, start, end])
+        cursor.execute(sql, params)
         return {int(b): (t, vmin, vmax, vsum, int(n)) for b, t, vmin, vmax, vsum, n in cursor.fetchall()}
 
 
@@ -125,10 +129,8 @@ def _from_rollups(topic: str, field: str, level: int, width: int, b0: int, b1: i
     if not Rollup.objects.filter(topic=topic, level_s=level, field=field).exists():
         return None
     per_slot = level * 1000
-    with connection.cursor() as cursor:
-        cursor.execute(_ROLLUPS, [per_slot, width, topic, level, field, b0 * width // per_slot,
-                                  (b1 + 1) * width // per_slot])
-        return {int(b): (t, vmin, vmax, vsum, int(n)) for b, t, vmin, vmax, vsum, n in cursor.fetchall()}
+    return _buckets(_ROLLUPS, [per_slot, width, topic, level, field, b0 * width // per_slot,
+                               (b1 + 1) * width // per_slot])
 
 
 def _from_samples(topic: str, field: str, width: int, b0: int, b1: int, now: float | None) -> dict[int, Agg]:

@@ -15,6 +15,7 @@ import logging
 import os
 import time
 from collections.abc import Sequence
+from contextlib import suppress
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -106,11 +107,7 @@ def _remove_empty_hours(cutoff: float) -> None:
             if hour.is_dir() and hour.stat().st_mtime < cutoff:
                 for stray in hour.glob("*.part"):
                     stray.unlink(missing_ok=True)
-                try:
+                with suppress(OSError):
                     hour.rmdir()  # only when empty
-                except OSError:
-                    pass
-        try:
+        with suppress(OSError):
             day.rmdir()
-        except OSError:
-            pass

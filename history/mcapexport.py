@@ -23,11 +23,14 @@ from robot import interface as ri
 
 CAMERA_TOPIC = "/camera"
 POSE_TOPIC = "/pose"
+_STAMPED = {
+    "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+    "frame_id": {"type": "string"},
+}
 COMPRESSED_IMAGE_SCHEMA = {
     "type": "object", "title": "foxglove.CompressedImage",
     "properties": {
-        "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-        "frame_id": {"type": "string"},
+        **_STAMPED,
         "data": {"type": "string", "contentEncoding": "base64"},
         "format": {"type": "string"},
     },
@@ -35,8 +38,7 @@ COMPRESSED_IMAGE_SCHEMA = {
 POSE_IN_FRAME_SCHEMA = {
     "type": "object", "title": "foxglove.PoseInFrame",
     "properties": {
-        "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-        "frame_id": {"type": "string"},
+        **_STAMPED,
         "pose": {"type": "object", "properties": {
             "position": {"type": "object", "properties": {a: {"type": "number"} for a in "xyz"}},
             "orientation": {"type": "object", "properties": {a: {"type": "number"} for a in "xyzw"}},
@@ -73,24 +75,22 @@ def incident_mcap(incident: Incident, *, hidden: frozenset[str] = frozenset()) -
     channels: dict[str, int] = {}
     pose_name = ri.topic("robot_pose").name
 
-    def channel(topic: str, schema_name: str, schema: dict[str, Any]) -> int:
+    def add(topic: str, schema_name: str, schema: dict[str, Any], t: float, message: Any) -> None:
         if topic not in channels:
             schema_id = writer.register_schema(name=schema_name, encoding="jsonschema", data=_json(schema))
             channels[topic] = writer.register_channel(topic=topic, message_encoding="json", schema_id=schema_id,
                                                       metadata={"ros_type": schema_name})
-        return channels[topic]
+        writer.add_message(channels[topic], log_time=_ns(t), publish_time=_ns(t), data=_json(message))
 
     rows = (Sample.objects.filter(received_at__gte=utc(incident.start), received_at__lte=utc(incident.end))
             .exclude(topic__in=hidden).order_by("received_at")
             .values_list("topic", "msg_type", "received_at", "data"))
     for topic, msg_type, at, data in rows.iterator(chunk_size=2000):
         t = at.timestamp()
-        writer.add_message(channel(topic, msg_type, json_schema(data)), log_time=_ns(t), publish_time=_ns(t),
-                           data=_json(data))
+        add(topic, msg_type, json_schema(data), t, data)
         if topic == pose_name and isinstance(data, dict):
             pose = {"timestamp": _stamp(t), "frame_id": ri.MAP_FRAME, "pose": data}
-            writer.add_message(channel(POSE_TOPIC, "foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA),
-                               log_time=_ns(t), publish_time=_ns(t), data=_json(pose))
+            add(POSE_TOPIC, "foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA, t, pose)
     frames = CameraFrame.objects.filter(t__gte=incident.start, t__lte=incident.end).order_by("t")
     for frame in frames.iterator(chunk_size=500):
         try:
@@ -99,7 +99,6 @@ def incident_mcap(incident: Incident, *, hidden: frozenset[str] = frozenset()) -
             continue  # its file is gone (a disk cleaned by hand): the rest still exports
         image = {"timestamp": _stamp(frame.t), "frame_id": "camera", "format": "jpeg",
                  "data": base64.b64encode(jpeg).decode()}
-        writer.add_message(channel(CAMERA_TOPIC, "foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA),
-                           log_time=_ns(frame.t), publish_time=_ns(frame.t), data=_json(image))
+        add(CAMERA_TOPIC, "foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA, frame.t, image)
     writer.finish()
     return out.getvalue()

@@ -20,9 +20,7 @@ _BY_TOPIC: dict[tuple[str, str], tuple[str, float]] = {
     ("battery_recharge_state", "data"): ("state code", 1.0),
     ("motors_state", "data"): ("1 = on", 1.0),
     ("client_count", "data"): ("clients", 1.0),
-    ("emotional_state", "current_pleasure"): ("−1 … 1", 1.0),
-    ("emotional_state", "current_arousal"): ("−1 … 1", 1.0),
-    ("emotional_state", "current_dominance"): ("−1 … 1", 1.0),
+    **{("emotional_state", f"current_{axis}"): ("−1 … 1", 1.0) for axis in ("pleasure", "arousal", "dominance")},
 }
 _BY_PATH: list[tuple[re.Pattern[str], str]] = [
     (re.compile(r"(^|\.)position\.[xyz]$"), "m"),

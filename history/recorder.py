@@ -24,7 +24,7 @@ from history.models import Mode
 from history.policies import Policy, load_policies
 from history.sampling import is_due, latest_key
 from history.sessions import SessionNotes
-from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
+from history.storage import FailureLog, Pending, Row, encode, write_rows
 
 log = logging.getLogger(__name__)
 
@@ -188,13 +188,7 @@ class Recorder:
         pending = self.take()
         if not pending and not self._retry:
             return 0
-        try:
-            written = await in_thread(self.flush_sync, pending)
-        except Exception:
-            self._write_log.failed()
-            return 0
-        self._write_log.ok()
-        return written
+        return await self._write_log.attempt(self.flush_sync, pending) or 0
 
     async def run(self, link: Any) -> None:
         """Background service: reload policies, keep subscriptions, flush batches, publish latest."""
@@ -230,12 +224,9 @@ class Recorder:
             self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since, now=time.time()))
 
     async def reload(self, link: Any) -> None:
-        try:
-            policies = await in_thread(load_policies)
-        except Exception:
-            self._reload_log.failed()  # the previous policies stay in force
-            return
-        self._reload_log.ok()
+        policies = await self._reload_log.attempt(load_policies)
+        if policies is None:
+            return  # the previous policies stay in force
         self.apply(policies)
         wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
         for name, msg_type in wanted.items():

@@ -16,7 +16,7 @@ from typing import Any
 
 from django.conf import settings
 from django.db import connection
-from django.db.models import Max, Min
+from django.db.models import Max, Min, QuerySet
 from django.urls import reverse
 
 from history.frames import frame_at
@@ -41,8 +41,8 @@ PLAN_FRESH_S = 30.0
 MAX_WINDOW_S = 300.0
 
 
-def topic_names(keys: Iterable[str]) -> dict[str, str]:
-    return {ri.topic(key).name: key for key in keys}
+def topic_names(keys: Iterable[str], hidden: frozenset[str] = frozenset()) -> dict[str, str]:
+    return {name: key for key in keys if (name := ri.topic(key).name) not in hidden}
 
 
 def latest_each(topics: Iterable[str], t: float) -> dict[str, dict[str, Any]]:
@@ -80,22 +80,23 @@ def goal_of(plan: dict[str, Any] | None, status: dict[str, Any] | None, t: float
     return {"x": float(end.get("x", 0.0)), "y": float(end.get("y", 0.0))}
 
 
+def _in_order(rows: QuerySet[Any, Any], *order: str, limit: int | None) -> list[Any]:
+    """``rows`` in time order: all of them, or the last ``limit``."""
+    if limit is None:
+        return list(rows.order_by(*order))
+    return list(rows.order_by(*(f"-{field}" for field in order))[:limit])[::-1]
+
+
 def log_lines(start: float, end: float, limit: int | None = None) -> list[dict[str, Any]]:
     rows = Sample.objects.filter(topic=ri.topic("rosout").name, received_at__gt=utc(start), received_at__lte=utc(end))
-    if limit is not None:
-        picked = list(rows.order_by("-received_at").values_list("received_at", "data")[:limit])[::-1]
-    else:
-        picked = list(rows.order_by("received_at").values_list("received_at", "data"))
+    picked = _in_order(rows.values_list("received_at", "data"), "received_at", limit=limit)
     return [{"t": at.timestamp(), "level": ri.LOG_LEVELS.get(d.get("level"), str(d.get("level"))),
              "name": d.get("name", ""), "msg": d.get("msg", "")} for at, d in picked]
 
 
 def commands(start: float, end: float, limit: int | None = None) -> list[dict[str, Any]]:
-    rows = AuditEntry.objects.filter(created__gt=utc(start), created__lte=utc(end))
-    if limit is not None:
-        picked = list(rows.order_by("-created", "-id")[:limit])[::-1]
-    else:
-        picked = list(rows.order_by("created", "id"))
+    picked = _in_order(AuditEntry.objects.filter(created__gt=utc(start), created__lte=utc(end)), "created", "id",
+                       limit=limit)
     return [{"id": e.pk, "t": e.created.timestamp(), "who": e.username or "system", "action": e.action,
              "params": e.params, "ok": e.ok, "outcome": e.outcome} for e in picked]
 
@@ -150,7 +151,7 @@ def map_png(sample_id: int) -> Path:
 
 def state_at(t: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any]:
     """The robot as it was at ``t``; topics named in ``hidden`` (sensitive for this person) left out."""
-    names = {name: key for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    names = topic_names(STATE_KEYS, hidden)
     topics = {names[name]: value for name, value in latest_each(names, t).items()}
     pose = topics.get("robot_pose")
     return {
@@ -169,7 +170,7 @@ def state_at(t: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any
 def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any]:
     """Every change in (start, end] (at most ``MAX_WINDOW_S``), for a player to run through."""
     end = min(end, start + MAX_WINDOW_S)
-    names = {name: key for name, key in topic_names(STATE_KEYS).items() if name not in hidden}
+    names = topic_names(STATE_KEYS, hidden)
     rows = (Sample.objects.filter(topic__in=list(names), received_at__gt=utc(start), received_at__lte=utc(end))
             .order_by("received_at").values_list("topic", "received_at", "data"))
     changes: list[list[Any]] = []

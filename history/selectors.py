@@ -111,13 +111,8 @@ def state_timeline(*, start: datetime, end: datetime, now: float | None = None) 
     topic = ri.topic("state_change").name
     t0, t1 = start.timestamp(), min(end.timestamp(), now or time.time())
     topics = [topic, SESSION_TOPIC]
-    before = list(
-        Sample.objects.filter(topic=topic, received_at__lt=start).order_by("-received_at")
-        .values_list("received_at", "topic", "data")[:1]
-    ) + list(
-        Sample.objects.filter(topic=SESSION_TOPIC, received_at__lt=start).order_by("-received_at")
-        .values_list("received_at", "topic", "data")[:1]
-    )
+    before = [row for name in topics for row in Sample.objects.filter(topic=name, received_at__lt=start)
+              .order_by("-received_at").values_list("received_at", "topic", "data")[:1]]
     events = sorted(before) + list(
         Sample.objects.filter(topic__in=topics, received_at__gte=start, received_at__lt=utc(t1))
         .order_by("received_at", "id").values_list("received_at", "topic", "data")

@@ -8,8 +8,6 @@ left (after a restart: ``startup``), so nothing from before the restart is carri
 
 from __future__ import annotations
 
-from typing import Any
-
 from history.storage import Pending
 
 SESSION_TOPIC = "/cyborg_commander/robot_link"
@@ -28,13 +26,8 @@ class SessionNotes:
     def note(self, *, connected: bool, since: float, now: float) -> list[Pending]:
         if connected != self.connected:
             self.connected, self.beat_at = connected, now
-            return [_row(connected, since)]
-        if not connected and now - self.beat_at >= OFFLINE_BEAT_S:
-            self.beat_at = now
-            return [_row(False, now)]
-        return []
-
-
-def _row(connected: bool, t: float) -> Pending:
-    msg: dict[str, Any] = {"connected": connected}
-    return (SESSION_TOPIC, SESSION_TYPE, msg, t)
+        elif not connected and now - self.beat_at >= OFFLINE_BEAT_S:
+            self.beat_at = since = now
+        else:
+            return []
+        return [(SESSION_TOPIC, SESSION_TYPE, {"connected": connected}, since)]

@@ -62,19 +62,18 @@ class FailureLog:
                 log.exception("history: %s failed; retrying quietly until it works", self.what)
             self.failing = True
 
+    async def attempt[T](self, fn: Callable[..., T], *args: Any) -> T | None:
+        """``fn(*args)`` in a worker thread (``in_thread``); None when it failed (logged once per outage)."""
+        try:
+            result = await in_thread(fn, *args)
+        except Exception:
+            self.failed()
+            return None
+        self.ok()
+        return result
+
 
 IN_FLIGHT_WAIT_S = 10.0
-
-
-async def write_batch[T](writer: Callable[[T], int], batch: T, failures: FailureLog) -> int | None:
-    """``writer(batch)`` in a worker thread: the rows written, or None when it failed (logged once per outage)."""
-    try:
-        written = await in_thread(writer, batch)
-    except Exception:
-        failures.failed()
-        return None
-    failures.ok()
-    return written
 
 
 async def in_thread[T](fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
