@@ -129,28 +129,22 @@ def _audit_fields(command: Command, user: Any, source: str) -> dict[str, Any]:
             "address": client_address.get()}
 
 
-def _prepare(command: Command, audit: dict[str, Any]) -> Any:
-    """Role check, then ``check``: what ``send`` gets; a refusal or bad input is audited and raised."""
-    if not command.allowed(audit["user"]):
-        error = Forbidden(command.refusal)
-        _record_here(**audit, ok=False, outcome=error.message, error_code=error.code)
-        raise error
-    try:
-        return command.check()
-    except RobotError as exc:
-        _record_here(**audit, ok=False, outcome=exc.message, error_code=exc.code)
-        raise
+def _checked(command: Command, user: Any) -> Any:
+    """Role check, then ``check``: what ``send`` gets (a refusal or bad input is raised, and audited
+    by the face that called it)."""
+    if not command.allowed(user):
+        raise Forbidden(command.refusal)
+    return command.check()
 
 
-_aprepare = sync_to_async(_prepare, thread_sensitive=True)
+_achecked = sync_to_async(_checked, thread_sensitive=True)
 
 
 def run_command(command: Command, *, user: Any, source: str) -> str:
     """The synchronous face: one hop onto the event loop, for ``send``."""
     audit = _audit_fields(command, user, source)
-    checked = _prepare(command, audit)
     try:
-        outcome = async_to_sync(_send)(command, checked)
+        outcome = async_to_sync(_send)(command, _checked(command, user))
     except RobotError as exc:
         _record_here(**audit, ok=False, outcome=exc.message, error_code=exc.code)
         raise
@@ -161,19 +155,11 @@ def run_command(command: Command, *, user: Any, source: str) -> str:
 async def arun(command: Command, *, user: Any, source: str) -> str:
     """The asynchronous face: at most one thread hop before sending, one for the audit entry."""
     audit = _audit_fields(command, user, source)
-    if roles_cached(user) and (command.check is _unchecked or command.check_on_loop):
-        if not command.allowed(user):  # reads only the cached roles: no database on the loop
-            error = Forbidden(command.refusal)
-            await _record(**audit, ok=False, outcome=error.message, error_code=error.code)
-            raise error
-        try:
-            checked = command.check()
-        except RobotError as exc:
-            await _record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
-            raise
-    else:
-        checked = await _aprepare(command, audit)
     try:
+        if roles_cached(user) and (command.check is _unchecked or command.check_on_loop):
+            checked = _checked(command, user)  # reads only the cached roles: no database on the loop
+        else:
+            checked = await _achecked(command, user)
         outcome = await _send(command, checked)
     except RobotError as exc:
         await _record(**audit, ok=False, outcome=exc.message, error_code=exc.code)
