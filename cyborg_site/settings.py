@@ -236,13 +236,12 @@ if REDIS_URL:
             },
         }
     }
+    # Celery's queues under the same prefix as everything else, so deployments can share one Redis.
+    CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
 else:
     CHANNEL_LAYERS = {"default": {"BACKEND": "channels.layers.InMemoryChannelLayer", "CONFIG": {"capacity": 200}}}
 
 CELERY_BROKER_URL = REDIS_URL or "memory://"
-if REDIS_URL:
-    # Celery's queues under the same prefix as everything else, so deployments can share one Redis.
-    CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
 CELERY_RESULT_BACKEND = REDIS_URL or None
 CELERY_TASK_ALWAYS_EAGER = False
 CELERY_TASK_IGNORE_RESULT = True

@@ -130,8 +130,7 @@ def reset_store() -> None:
 
 def link_status(store: StateStore | None = None) -> dict[str, Any]:
     """The link's last reported status; offline when the link has not reported recently."""
-    status = (store or get_store()).get_all().get(STATUS_KEY)
-    return status_view(status)
+    return status_view((store or get_store()).get_all().get(STATUS_KEY))
 
 
 def status_view(status: dict[str, Any] | None, now: float | None = None) -> dict[str, Any]:
