@@ -14,10 +14,8 @@ from typing import Any
 from robot.link.bus import EstopEngaged
 from robot.live.announce import apublish_state
 from robot.live.groups import LATCH_KEY
-from robot.live.latchstate import RELEASED, Latch, format_time
+from robot.live.latchstate import Latch
 from robot.live.state import get_store
-
-__all__ = ["LATCH_KEY", "RELEASED", "EstopEngaged", "Latch", "format_time"]
 
 
 async def alatch() -> Latch:

@@ -36,8 +36,7 @@ def merge_statuses(known: dict[str, Any], messages: list[dict[str, Any]], *, now
             if old is None or old["code"] != code or old.get("text") != item.get("text", ""):
                 goals[gid] = {"code": code, "state": goal_state(code), "text": item.get("text", ""), "t": now}
     if len(goals) > KEEP_GOALS:
-        newest = sorted(goals.items(), key=lambda kv: kv[1]["t"], reverse=True)[:KEEP_GOALS]
-        goals = dict(newest)
+        goals = dict(sorted(goals.items(), key=lambda kv: kv[1]["t"], reverse=True)[:KEEP_GOALS])
     return {"goals": goals}
 
 
