@@ -7,7 +7,6 @@ millions of rows never sits in memory.
 from __future__ import annotations
 
 import csv
-import io
 import json
 from collections.abc import Iterator
 from datetime import datetime
@@ -65,8 +64,8 @@ def pick(msg: Any, path: str) -> Any:
 
 def export_csv(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
     """One row per sample: time, type, the first message's scalar fields, then the whole message."""
-    buffer = io.StringIO()
-    out = csv.writer(buffer)
+    sink = _Sink()
+    out = csv.writer(sink)
     columns: list[str] | None = None
     for n, (msg_type, received_at, data) in enumerate(_rows(topic, start, end), 1):
         if columns is None:
@@ -74,27 +73,20 @@ def export_csv(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
             out.writerow(["received_at", "topic", "msg_type", *columns, "message"])
         out.writerow([received_at.isoformat(), topic, msg_type, *(pick(data, c) for c in columns), _dumps(data)])
         if n % CHUNK_ROWS == 0:
-            yield _drain(buffer)
+            yield sink.drain()
     if columns is None:
         out.writerow(["received_at", "topic", "msg_type", "message"])
-    yield _drain(buffer)
+    yield sink.drain()
 
 
 def export_jsonl(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
-    buffer = io.StringIO()
+    sink = _Sink()
     for n, (msg_type, received_at, data) in enumerate(_rows(topic, start, end), 1):
         record = {"topic": topic, "msg_type": msg_type, "received_at": received_at.isoformat(), "msg": data}
-        buffer.write(_dumps(record) + "\n")
+        sink.write(_dumps(record) + "\n")
         if n % CHUNK_ROWS == 0:
-            yield _drain(buffer)
-    yield _drain(buffer)
-
-
-def _drain(buffer: io.StringIO) -> bytes:
-    data = buffer.getvalue().encode()
-    buffer.seek(0)
-    buffer.truncate()
-    return data
+            yield sink.drain()
+    yield sink.drain()
 
 
 def json_schema(msg: Any) -> dict[str, Any]:
@@ -113,15 +105,17 @@ def json_schema(msg: Any) -> dict[str, Any]:
 
 
 class _Sink:
-    """A write-only stream the MCAP writer fills and the generator empties (tell() keeps counting)."""
+    """A write-only stream the writers fill (text as UTF-8) and the generator empties; tell() keeps
+    counting, for the MCAP writer's offsets."""
 
     def __init__(self) -> None:
         self.chunks: list[bytes] = []
         self.offset = 0
 
-    def write(self, data: bytes) -> int:
-        self.chunks.append(bytes(data))
-        self.offset += len(data)
+    def write(self, data: bytes | str) -> int:
+        chunk = data.encode() if isinstance(data, str) else bytes(data)
+        self.chunks.append(chunk)
+        self.offset += len(chunk)
         return len(data)
 
     def tell(self) -> int:

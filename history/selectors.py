@@ -21,15 +21,11 @@ def numeric_fields(msg: Any) -> list[str]:
     return [path for path, _ in numeric_leaves(msg)]
 
 
-def latest_sample(topic: str) -> Sample | None:
-    return Sample.objects.filter(topic=topic).order_by("-received_at").first()
-
-
 def recorded_topics() -> list[dict[str, Any]]:
     """Topics with a policy or with samples kept under one, newest sample first-class."""
     out = []
     for policy in TopicPolicy.objects.all():
-        last = latest_sample(policy.topic)
+        last = Sample.objects.filter(topic=policy.topic).order_by("-received_at").first()
         if last is None and policy.mode == Mode.OFF:
             continue
         out.append({
@@ -95,12 +91,8 @@ def recorded_spans(t0: float, t1: float, gap_s: float = GAP_S) -> list[tuple[flo
             spans[-1][1] = hi
         else:
             spans.append([lo, hi])
-    out = []
-    for lo, hi in spans:
-        lo, hi = max(lo, t0), min(t1, t1 if t1 - hi <= gap_s else hi)
-        if hi > lo:
-            out.append((lo, hi))
-    return out
+    clipped = [(max(lo, t0), t1 if t1 - hi <= gap_s else min(t1, hi)) for lo, hi in spans]
+    return [(lo, hi) for lo, hi in clipped if hi > lo]
 
 
 def state_timeline(*, start: datetime, end: datetime, now: float | None = None) -> Timeline:
