@@ -12,6 +12,7 @@ loses samples, the oldest first.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import time
 from typing import Any
@@ -21,7 +22,9 @@ from django.db import transaction
 
 from history.models import Mode, TopicPolicy
 from history.policies import load_policies
+from history.retention import prune_expired
 from history.storage import FailureLog, Pending, encode, in_thread, write_rows
+from robot.live.state import get_store
 
 log = logging.getLogger(__name__)
 
@@ -41,10 +44,7 @@ def is_due(t: float, last: float, interval_s: float) -> bool:
 
 def sample_periodic(*, store: Any = None) -> int:
     """Store the newest message of each periodic topic whose interval has passed; returns rows stored."""
-    if store is None:
-        from robot.live.state import get_store
-
-        store = get_store()
+    store = store or get_store()
     periodic = [p for p in load_policies().values() if p.mode == Mode.PERIODIC]
     if not periodic:
         return 0
@@ -78,10 +78,6 @@ def sample_periodic(*, store: Any = None) -> int:
 
 async def run_schedule(link: Any) -> None:
     """Embedded default: the beat schedule (sampling, retention) inside the server process."""
-    import asyncio
-
-    from history.retention import prune_expired
-
     next_prune = time.monotonic() + settings.HISTORY_SAMPLE_TICK_S
     failures = FailureLog("periodic sampling and pruning")
     while True:
