@@ -30,7 +30,6 @@ RETRY_S = 1.0
 SUBSCRIBE_WAIT_S = 3.0
 GAP_MARGIN_S = 1.0  # an update stamped this long before the subscription was lost may not have come through
 SUBSCRIBER_NAME = f"cyborg-live-{os.getpid()}"  # in Redis's CLIENT LIST
-_clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
 _subscribers: weakref.WeakKeyDictionary[Hub, asyncio.Task] = weakref.WeakKeyDictionary()
 _ready: weakref.WeakKeyDictionary[Hub, asyncio.Event] = weakref.WeakKeyDictionary()
 
