@@ -54,7 +54,6 @@ class Grid:
     resolution: float
     origin_x: float
     origin_y: float
-    origin_yaw: float = 0.0
 
 
 def global_costmap(world: WorldMap) -> Grid:

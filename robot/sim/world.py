@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import distance_transform_edt
 
 RESOLUTION = 0.05  # m/cell, like the Cyborg's gmapping maps
 ROBOT_RADIUS = 0.2  # m, footprint used for collisions (the Pioneer LX is ~0.35 m, we are generous)
@@ -56,6 +57,13 @@ class WorldMap:
             return False
         return not any(self.occupied(x + radius * cx, y + radius * sy) for cx, sy in _RING)
 
+    def fan(self, body: Base, mount_x: float, fov: float, beams: int, max_range: float) -> list[tuple[float, float]]:
+        """(angle from the heading, range) of ``beams`` rays spread over ``fov`` from a sensor
+        mounted ``mount_x`` ahead of the body's centre."""
+        x, y = body.x + mount_x * math.cos(body.yaw), body.y + mount_x * math.sin(body.yaw)
+        angles = [-fov / 2 + i * fov / (beams - 1) for i in range(beams)]
+        return [(a, self.raycast(x, y, body.yaw + a, max_range)) for a in angles]
+
     def raycast(self, x: float, y: float, angle: float, max_range: float = 5.0) -> float:
         step = self.resolution
         dx, dy = math.cos(angle) * step, math.sin(angle) * step
@@ -69,13 +77,6 @@ class WorldMap:
         return max_range
 
 
-def _rect(grid: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: int, ox: float, oy: float,
-          res: float) -> None:
-    c0, c1 = int((x0 - ox) / res), (math.ceil((x1 - ox) / res))
-    r0, r1 = int((y0 - oy) / res), (math.ceil((y1 - oy) / res))
-    grid[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = value
-
-
 def glassgarden() -> WorldMap:
     """A 20 x 15 m hall (400 x 300 cells) loosely after Glassgården: glass-roofed atrium, pillars,
     a café and meeting rooms along the north wall, the entrance in the south wall, unknown outside."""
@@ -83,7 +84,9 @@ def glassgarden() -> WorldMap:
     grid = np.full((300, 400), UNKNOWN, dtype=np.int8)
 
     def rect(x0: float, y0: float, x1: float, y1: float, v: int) -> None:
-        _rect(grid, x0, y0, x1, y1, v, ox, oy, res)
+        c0, c1 = int((x0 - ox) / res), math.ceil((x1 - ox) / res)
+        r0, r1 = int((y0 - oy) / res), math.ceil((y1 - oy) / res)
+        grid[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = v
 
     rect(-9.5, -7.0, 9.5, 7.0, OCCUPIED)  # outer wall band ...
     rect(-9.35, -6.85, 9.35, 6.85, FREE)  # ... hollowed out: 15 cm walls
@@ -163,15 +166,8 @@ class Planner:
         lethal = (blocks != FREE).any(axis=(1, 3))
         self.res = world.resolution * f
         rad = max(1, (math.ceil(INFLATION / self.res)))
-        inflated = lethal.copy()
-        for dr in range(-rad, rad + 1):
-            for dc in range(-rad, rad + 1):
-                if dr * dr + dc * dc > rad * rad:
-                    continue
-                shifted = np.zeros_like(lethal)
-                shifted[max(dr, 0):h + min(dr, 0), max(dc, 0):w + min(dc, 0)] = \
-                    lethal[max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)]
-                inflated |= shifted
+        # Within rad cells (Euclidean) of a lethal cell; a map without any has nothing to inflate.
+        inflated = distance_transform_edt(~lethal) <= rad if lethal.any() else lethal
         self.cost = np.where(lethal, -1, np.where(inflated, 12, 1)).astype(np.int16)
         self.h, self.w = h, w
 
@@ -308,6 +304,12 @@ class Base:
 
     def _clearance(self, x: float, y: float) -> float:
         return min(self.world.raycast(x, y, a, 1.0) for a in np.linspace(0, 2 * math.pi, 8, endpoint=False))
+
+    def map_from_odom(self) -> tuple[float, float, float]:
+        """Where odometry's frame is on the map: whatever makes map -> odom -> base_link the true pose."""
+        dyaw = wrap(self.yaw - self.odom_yaw)
+        c, s = math.cos(dyaw), math.sin(dyaw)
+        return self.x - (c * self.odom_x - s * self.odom_y), self.y - (s * self.odom_x + c * self.odom_y), dyaw
 
     def teleport(self, x: float, y: float, yaw: float) -> None:
         self.x, self.y, self.yaw = x, y, wrap(yaw)

@@ -14,6 +14,7 @@ from .shapes import body_pose, transform
 
 NODE = "/RosAria"
 SONAR_X = 0.1  # the sonar ring's offset ahead of base_link
+SONAR_MAX_M = 5.0
 
 
 def _never() -> bool:
@@ -120,33 +121,31 @@ class BaseNode(SimNode):
 
     def _pub_tf(self) -> None:
         b = self.body
-        # map->odom is whatever makes map->odom->base_link equal the true pose.
-        dyaw = world.wrap(b.yaw - b.odom_yaw)
-        c, s = math.cos(dyaw), math.sin(dyaw)
-        tx = b.x - (c * b.odom_x - s * b.odom_y)
-        ty = b.y - (s * b.odom_x + c * b.odom_y)
         self.bus.publish("tf", {"transforms": [
-            transform("map", "odom", tx, ty, dyaw),
+            transform("map", "odom", *b.map_from_odom()),
             transform("odom", "base_link", b.odom_x, b.odom_y, b.odom_yaw),
         ]})
 
+    def sonar(self) -> list[tuple[float, float]]:
+        """(angle, range) of the ring's 8 sonars, from the ring itself (the "sonar" frame, SONAR_X
+        ahead of base_link on /tf_static) across the front half."""
+        return self.world.fan(self.body, SONAR_X, math.pi, 8, SONAR_MAX_M)
+
+    def bumpers(self) -> tuple[bool, bool]:
+        """(front, rear) pressed: for half a second after a bump, on the side the base was driving."""
+        hit = self.bus.clock.now() < self.bumper_until
+        front = hit and self.body.cmd_v >= 0
+        return front, hit and not front
+
     def _pub_sonar(self) -> None:
-        b = self.body
-        # Ranges from the ring itself (the "sonar" frame, SONAR_X ahead of base_link on /tf_static).
-        x, y = b.x + SONAR_X * math.cos(b.yaw), b.y + SONAR_X * math.sin(b.yaw)
-        points = []
-        for i in range(8):
-            a = -math.pi / 2 + i * math.pi / 7
-            d = self.world.raycast(x, y, b.yaw + a, 5.0)
-            points.append({"x": d * math.cos(a), "y": d * math.sin(a), "z": 0.0})
+        points = [{"x": d * math.cos(a), "y": d * math.sin(a), "z": 0.0} for a, d in self.sonar()]
         self.bus.publish("sonar", {"header": messages.header("sonar"), "points": points, "channels": []})
 
     def _pub_bumper(self) -> None:
         if self.bus.wants("bumper_state"):
-            hit = self.bus.clock.now() < self.bumper_until
-            front = hit and self.body.cmd_v >= 0
+            front, rear = self.bumpers()
             self.bus.publish("bumper_state", {"header": messages.header("base_link"),
-                                              "front_bumpers": [front] * 5, "rear_bumpers": [hit and not front] * 5})
+                                              "front_bumpers": [front] * 5, "rear_bumpers": [rear] * 5})
 
     def _pub_battery(self) -> None:
         self.bus.publish("battery_soc", {"data": self.soc})

@@ -11,31 +11,19 @@ from robot import interface as ri
 from .. import messages
 from ..bus import Bus, SimNode
 from ..costmaps import ODOM_FRAME, Grid, footprint, global_costmap, local_costmap, local_plan
-from ..world import Base, WorldMap, wrap, yaw_to_quaternion
-
-
-def _pose(x: float, y: float, yaw: float) -> dict[str, Any]:
-    return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": yaw_to_quaternion(yaw)}
+from ..world import Base, WorldMap
+from .shapes import grid, pose
 
 
 def grid_message(g: Grid, frame: str) -> dict[str, Any]:
     h, w = g.data.shape
-    return {"header": messages.header(frame), "info": {
-        "map_load_time": messages.stamp(), "resolution": g.resolution, "width": w, "height": h,
-        "origin": _pose(g.origin_x, g.origin_y, g.origin_yaw)}, "data": g.data.ravel().tolist()}
+    return grid(g.data.ravel().tolist(), w, h, g.resolution, g.origin_x, g.origin_y, messages.stamp(), frame)
 
 
 def update_message(g: Grid, frame: str, x: int, y: int, width: int, height: int) -> dict[str, Any]:
     cells = g.data[y:y + height, x:x + width]
     return {"header": messages.header(frame), "x": x, "y": y, "width": width, "height": height,
             "data": cells.ravel().tolist()}
-
-
-def map_from_odom(b: Base) -> tuple[float, float, float]:
-    """Where odometry's frame is on the map (what the base's /tf says: map -> odom)."""
-    dyaw = wrap(b.yaw - b.odom_yaw)
-    c, s = math.cos(dyaw), math.sin(dyaw)
-    return b.x - (c * b.odom_x - s * b.odom_y), b.y - (s * b.odom_x + c * b.odom_y), dyaw
 
 
 class CostmapNode(SimNode):
@@ -66,16 +54,11 @@ class CostmapNode(SimNode):
         bus.every(0.2, self._pub_footprint, wanted="footprint")
         bus.every(0.2, self._pub_local_plan)
 
-    @property
-    def global_grid(self) -> Grid:
-        if self._global is None:
-            self._global = global_costmap(self.world)
-        return self._global
-
     def _pub_global(self) -> None:
         name = ri.topic("global_costmap").name
         if self.bus.wants("global_costmap") and self._global is None:
-            self.bus.publish_name(name, grid_message(self.global_grid, ri.MAP_FRAME), latch=True)
+            self._global = global_costmap(self.world)  # built for its first listener, then kept
+            self.bus.publish_name(name, grid_message(self._global, ri.MAP_FRAME), latch=True)
             return
         if self._global is None or not self.bus.wants("global_costmap_updates"):
             return
@@ -94,7 +77,7 @@ class CostmapNode(SimNode):
         if not (wants_full or wants_update):
             return
         b = self.body
-        g = local_costmap(self.world, map_from_odom(b), (b.odom_x, b.odom_y))
+        g = local_costmap(self.world, b.map_from_odom(), (b.odom_x, b.odom_y))
         origin = (g.origin_x, g.origin_y)
         if origin != self._local_origin or not wants_update:
             self._local_origin = origin
@@ -118,4 +101,4 @@ class CostmapNode(SimNode):
         b = self.body
         poses = local_plan(b.odom_x, b.odom_y, b.odom_yaw, b.v, b.w) if active else []
         self.bus.publish("local_plan", {"header": messages.header(ODOM_FRAME), "poses": [
-            {"header": messages.header(ODOM_FRAME), "pose": _pose(x, y, yaw)} for x, y, yaw in poses]})
+            {"header": messages.header(ODOM_FRAME), "pose": pose(x, y, yaw)} for x, y, yaw in poses]})

@@ -7,18 +7,17 @@ publishes them once a second, and at once when a level changes (a motor switched
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
 
-from .. import messages, world
+from .. import messages
 from ..bus import Bus, SimNode
 from ..laser import MOUNT as LASER_MOUNT
 from ..laser import Laser
-from .base import SONAR_X, BaseNode
+from .base import BaseNode
 
 HARDWARE_ID = "Pioneer LX (simulated)"
 LASER_ID = "SICK S300 (simulated)"
@@ -27,9 +26,8 @@ BATTERY_ERROR_SOC = 0.05
 LASER_CLOSE_M = 0.25  # nearer than this the robot is about to touch something
 PERIOD_S = 1.0
 POLL_S = 0.1
-# Where the laser and the sonar ring sit on base_link (as the base's /tf_static says), what they cover.
+# What the laser covers (where it sits on base_link: laser.MOUNT, as the base's /tf_static says).
 LASER_FOV, LASER_MAX_M = Laser.angle_max - Laser.angle_min, Laser.range_max
-SONAR_MAX_M = 5.0
 
 
 @dataclass(frozen=True)
@@ -105,15 +103,6 @@ class DiagnosticsPublisher:
         return True
 
 
-def nearest(world_map: world.WorldMap, body: world.Base, mount_x: float, fov: float, max_m: float,
-            beams: int = 19) -> float:
-    """The nearest obstacle a sensor mounted ``mount_x`` ahead of the body's centre sees."""
-    x = body.x + mount_x * math.cos(body.yaw)
-    y = body.y + mount_x * math.sin(body.yaw)
-    angles = (body.yaw - fov / 2 + i * fov / (beams - 1) for i in range(beams))
-    return min(world_map.raycast(x, y, a, max_m) for a in angles)
-
-
 class DiagnosticsNode(SimNode):
     names: tuple[str, ...] = ()  # RosAria publishes them (the base node names /RosAria)
     publishes = ("diagnostics",)
@@ -131,12 +120,11 @@ class DiagnosticsNode(SimNode):
 
     def read(self) -> Reading:
         base, b = self.base, self.base.body
-        hit = self.bus.clock.now() < base.bumper_until
-        front = hit and b.cmd_v >= 0
+        front, rear = base.bumpers()
+        laser = base.world.fan(b, LASER_MOUNT[0], LASER_FOV, 19, LASER_MAX_M)
         return Reading(
             soc=base.soc, voltage=base.voltage(), recharge_state=base.recharge_state, motors=b.motors,
-            v=b.v, w=b.w, cmd_v=b.cmd_v, cmd_w=b.cmd_w, front_bumped=front, rear_bumped=hit and not front,
-            laser_nearest_m=nearest(base.world, b, LASER_MOUNT[0], LASER_FOV, LASER_MAX_M),
-            laser_max_m=LASER_MAX_M,
-            sonar_nearest_m=nearest(base.world, b, SONAR_X, math.pi, SONAR_MAX_M, beams=8),
+            v=b.v, w=b.w, cmd_v=b.cmd_v, cmd_w=b.cmd_w, front_bumped=front, rear_bumped=rear,
+            laser_nearest_m=min(d for _, d in laser), laser_max_m=LASER_MAX_M,
+            sonar_nearest_m=min(d for _, d in base.sonar()),
         )
