@@ -18,17 +18,6 @@ from typing import Any
 # Message definitions in the .msg syntax ("type name" pairs separated by ';').
 _DEFS: dict[str, str] = {
     "std_msgs/Header": "uint32 seq; time stamp; string frame_id",
-    "std_msgs/String": "string data",
-    "std_msgs/Bool": "bool data",
-    "std_msgs/Float32": "float32 data",
-    "std_msgs/Float64": "float64 data",
-    "std_msgs/Int8": "int8 data",
-    "std_msgs/UInt8": "uint8 data",
-    "std_msgs/Int16": "int16 data",
-    "std_msgs/Int32": "int32 data",
-    "std_msgs/Int64": "int64 data",
-    "std_msgs/UInt32": "uint32 data",
-    "std_msgs/Time": "time data",
     "std_msgs/Empty": "",
     "audio_common_msgs/AudioData": "uint8[] data",
     "audio_common_msgs/AudioInfo": (
@@ -118,6 +107,10 @@ _DEFS: dict[str, str] = {
     ),
 }
 
+# std_msgs' wrappers of one primitive: std_msgs/UInt8 is "uint8 data".
+for _name in ("String", "Bool", "Float32", "Float64", "Int8", "UInt8", "Int16", "Int32", "Int64", "UInt32", "Time"):
+    _DEFS[f"std_msgs/{_name}"] = f"{_name.lower()} data"
+
 # actionlib wrappers, generated the way genaction does.
 for _action in ("move_base_msgs/MoveBase", "cyborg_navigation/Navigation"):
     _DEFS[f"{_action}ActionGoal"] = f"std_msgs/Header header; actionlib_msgs/GoalID goal_id; {_action}Goal goal"
@@ -167,7 +160,9 @@ INT_RANGES: dict[str, tuple[int, int]] = {
     "int64": (-(2**63), 2**63 - 1), "uint64": (0, 2**64 - 1),
 }
 FLOATS = frozenset({"float32", "float64"})
-PRIMITIVES = frozenset(INT_RANGES) | FLOATS | {"bool", "string", "time", "duration"}
+_EXACT: dict[str, type] = {"bool": bool, "string": str}  # no other Python type passes for these
+_ZERO: dict[str, Any] = {**dict.fromkeys(INT_RANGES, 0), **dict.fromkeys(FLOATS, 0.0), "bool": False, "string": ""}
+PRIMITIVES = frozenset(_ZERO) | {"time", "duration"}
 _BYTE_ARRAYS = frozenset({"uint8", "char"})
 
 
@@ -210,14 +205,8 @@ def _default_value(ftype: str, length: int | None) -> Any:
         if ftype in _BYTE_ARRAYS:
             return base64.b64encode(bytes(max(length, 0))).decode()
         return [] if length < 0 else [_default_value(ftype, None) for _ in range(length)]
-    if ftype in INT_RANGES:
-        return 0
-    if ftype in FLOATS:
-        return 0.0
-    if ftype == "bool":
-        return False
-    if ftype == "string":
-        return ""
+    if ftype in _ZERO:
+        return _ZERO[ftype]
     if ftype in ("time", "duration"):
         return {"secs": 0, "nsecs": 0}
     return default(ftype)
@@ -246,12 +235,8 @@ def _primitive(root: str, ftype: str, value: Any, path: list[str]) -> Any:
         if not lo <= value <= hi:
             raise ConversionError(f"{root} message field {'.'.join(path)}: {value} out of range for {ftype}")
         return value
-    if ftype == "bool":
-        if vt is not bool:
-            raise _mismatch(root, ftype, path, value)
-        return value
-    if ftype == "string":
-        if vt is not str:
+    if ftype in _EXACT:
+        if vt is not _EXACT[ftype]:
             raise _mismatch(root, ftype, path, value)
         return value
     # time / duration
