@@ -17,6 +17,7 @@ import json
 import logging
 import math
 import time
+from functools import cached_property
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -38,19 +39,16 @@ class Renderer:
 
     def __init__(self, robot: CameraHost) -> None:
         self.robot = robot
-        self._map_image: Image.Image | None = None
         self._cache: dict[tuple[int, int, int], tuple[float, bytes]] = {}
 
-    @property
+    @cached_property
     def map_image(self) -> Image.Image:
-        if self._map_image is None:
-            g = self.robot.world.grid
-            rgb = np.empty((*g.shape, 3), dtype=np.uint8)
-            rgb[g == -1] = (90, 90, 110)
-            rgb[g == 0] = (235, 235, 225)
-            rgb[g > 0] = (30, 30, 30)
-            self._map_image = Image.fromarray(rgb[::-1])  # image rows run top-down, map rows bottom-up
-        return self._map_image
+        g = self.robot.world.grid
+        rgb = np.empty((*g.shape, 3), dtype=np.uint8)
+        rgb[g == -1] = (90, 90, 110)
+        rgb[g == 0] = (235, 235, 225)
+        rgb[g > 0] = (30, 30, 30)
+        return Image.fromarray(rgb[::-1])  # image rows run top-down, map rows bottom-up
 
     def frame(self, width: int = 640, height: int = 480, quality: int = 80) -> bytes:
         key = (width, height, quality)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import cached_property
+
 from ..bus import Bus, SimNode
 from ..laser import Laser
 from ..world import Base, WorldMap
@@ -17,17 +19,15 @@ class LaserNode(SimNode):
         self.body = body
         self.world = world_map
         self.rate_hz = rate_hz
-        self._laser: Laser | None = None  # built on first use: the distance map costs a moment
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
         bus.every(1.0 / self.rate_hz, self._publish, wanted="scan")
 
-    @property
+    @cached_property
     def laser(self) -> Laser:
-        if self._laser is None:
-            self._laser = Laser(self.world)
-        return self._laser
+        """Built on first use: the distance map costs a moment."""
+        return Laser(self.world)
 
     def _publish(self) -> None:
         b = self.body
