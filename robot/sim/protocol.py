@@ -112,14 +112,15 @@ class Broker:
         self.latched: dict[str, str] = {}
         self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}
         self.handlers: dict[str, list[Callable[[dict[str, Any]], object]]] = collections.defaultdict(list)
-        self.received_msgs: dict[str, collections.deque[Received]] = {}
+        self.received_msgs: dict[str, collections.deque[Received]] = collections.defaultdict(
+            lambda: collections.deque(maxlen=RECEIVED_KEEP))
         self.received_counts: collections.Counter[str] = collections.Counter()
         self.services: dict[str, tuple[str, ServiceHandler]] = {}
         self.client_services: dict[str, tuple[Client, str]] = {}
         self.clients: dict[int, Client] = {}
         self.publishers: dict[str, set[int]] = collections.defaultdict(set)
-        self._ids = itertools.count()
-        self._call_ids = itertools.count()
+        self.client_ids = itertools.count()
+        self.call_ids = (f"service_request:{n}" for n in itertools.count())  # calls relayed to a client
         self.pending_calls: dict[str, tuple[Client, Any, str]] = {}
 
     # --- robot side ------------------------------------------------------------------
@@ -185,10 +186,7 @@ class Broker:
 
     def deliver(self, topic: str, msg: dict[str, Any], latch: bool) -> None:
         """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
-        q = self.received_msgs.get(topic)
-        if q is None:
-            q = self.received_msgs[topic] = collections.deque(maxlen=RECEIVED_KEEP)
-        q.append(Received(time.time(), msg))
+        self.received_msgs[topic].append(Received(time.time(), msg))
         self.received_counts[topic] += 1
         self.publish(topic, msg, latch=latch)
         for handler in self.handlers.get(topic, ()):
@@ -196,12 +194,6 @@ class Broker:
                 handler(msg)
             except Exception:  # a robot node's bug must not kill the client's session
                 log.exception("handler for %s failed", topic)
-
-    def next_call_id(self) -> str:
-        return f"service_request:{next(self._call_ids)}"
-
-    def new_client_id(self) -> int:
-        return next(self._ids)
 
 
 _STR = (str,)
@@ -234,7 +226,7 @@ class Client:
 
     def __init__(self, broker: Broker, send: Callable[[str], Any], address: str = "") -> None:
         self.broker = broker
-        self.id = broker.new_client_id()
+        self.id = next(broker.client_ids)
         self.address = address
         self.connected_at = time.time()
         self._send = send  # coroutine function: await send(text)
@@ -378,7 +370,7 @@ class Client:
         provider = self.broker.client_services.get(name)
         if provider is not None:
             owner, _ = provider
-            call_id = self.broker.next_call_id()
+            call_id = next(self.broker.call_ids)
             self.broker.pending_calls[call_id] = (self, mid, name)
             owner.reply({"op": "call_service", "id": call_id, "service": name, "args": args})
             return
