@@ -33,6 +33,7 @@ BEHAVIOUR_PRESETS: dict[str, dict[str, Any]] = {
 }
 TIMED_BEHAVIOURS = ("show_off_mea", "conveying_emotional_state", "music_horror", "astrolanguage", "waking_up",
                     "sleepy")
+PLANNING_S = 0.3  # navigation_planning picks its leaf after this long
 
 
 class ControllerNode(SimNode):
@@ -45,9 +46,9 @@ class ControllerNode(SimNode):
         self.nav = navigation
         self.av = audiovisual
         self.emotion = emotion
-        self.startup_s = startup_s
-        self.demo_s = demo_s
-        self.behaviour_s = behaviour_s
+        # state: how long it lasts before the state timer fires
+        self.durations = {"startup": startup_s, "demo": demo_s, "navigation_planning": PLANNING_S,
+                          **dict.fromkeys(TIMED_BEHAVIOURS, behaviour_s)}
         self.sm = StateMachine(self._on_state_change)
         self._state_deadline: float | None = None
         self._internal_nav_goal: Goal | None = None
@@ -103,15 +104,9 @@ class ControllerNode(SimNode):
                 self.av.audio.play(preset["clip"])
             if "pad" in preset:
                 self.emotion.emotions.feedback(*preset["pad"])
-        if new == "startup":
-            self._state_deadline = now + self.startup_s
-        elif new == "demo":
-            self._state_deadline = now + self.demo_s
-        elif new in TIMED_BEHAVIOURS:
-            self._state_deadline = now + self.behaviour_s
-        elif new == "navigation_planning":
-            self._state_deadline = now + 0.3
-        elif new in ("navigation_go_to_emotional", "navigation_go_to_schedular", "wandering_emotional"):
+        if new in self.durations:
+            self._state_deadline = now + self.durations[new]
+        elif new in NAVIGATION_LEAVES:  # the leaves that go somewhere (planning is timed)
             self._behaviour_navigate(new)
         elif new == "exhausted":
             self._behaviour_navigate(new, "charging_station")
