@@ -15,13 +15,12 @@ import collections
 import logging
 import random
 import time
-from collections.abc import Callable
 from typing import Any, TypeVar
 
 from robot import interface as ri
 
 from . import messages
-from .actions import ActionServer, Goal
+from .actions import ActionServer
 from .audio import Audio, Microphone, Speaker
 from .bus import Bus, Clock, Node
 from .camera import VideoServer
@@ -81,10 +80,10 @@ class SimRobot:
         self.rng = random.Random(seed)
         self._world = build(map_name, seed)
         x, y, yaw = self._world.start
-        self.body = Base(self._world, x, y, yaw)
+        self.base = Base(self._world, x, y, yaw)  # the servers see base, world and broker (host.py)
         self.clock = Clock(time_scale)
-        self._broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
-        self.bus = Bus(self._broker, self.clock)
+        self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
+        self.bus = Bus(self.broker, self.clock)
         for t in ri.topics():
             self.bus.declare(t.name, t.type)
 
@@ -92,12 +91,12 @@ class SimRobot:
         self._started = False
         self.bridge = BridgeNode(self.rng)
         # Added in tick order: physics, then navigation, emotions, state timers.
-        self.base_node = self.add(BaseNode(self.body, self._world, self.rng, pose_rate_hz, battery_soc,
+        self.base_node = self.add(BaseNode(self.base, self._world, self.rng, pose_rate_hz, battery_soc,
                                            battery_drain_per_s, battery_charge_per_s))
-        self.nav_node = self.add(NavigationNode(self.body, self._world, self.rng, nav_speed))
-        self.add(LocalisationNode(self.body, self.rng))
-        self.add(LaserNode(self.body, self._world))
-        self.add(CostmapNode(self.body, self._world, lambda: self.nav_node.navigator.active))
+        self.nav_node = self.add(NavigationNode(self.base, self._world, self.rng, nav_speed))
+        self.add(LocalisationNode(self.base, self.rng))
+        self.add(LaserNode(self.base, self._world))
+        self.add(CostmapNode(self.base, self._world, lambda: self.nav_node.navigator.active))
         self.emotion_node = self.add(EmotionNode(self.rng))
         self.av_node = self.add(AudioVisualNode(tts_s_per_char, tts_min_s, clip_s, mic_tone_hz, mic_coding))
         self.controller = self.add(ControllerNode(self.rng, self.nav_node, self.av_node, self.emotion_node,
@@ -129,7 +128,7 @@ class SimRobot:
         for node in self.nodes:
             node.start(self.bus)
         # Encode the latched map now: a 4000 x 4000 map takes seconds, better before than mid-session.
-        self._broker.latched_frame(ri.topic("map").name)
+        self.broker.latched_frame(ri.topic("map").name)
         self.server = RosbridgeServer(self)
         await self.server.start(self.host, self.port)
         self.port = self.server.port
@@ -172,16 +171,8 @@ class SimRobot:
     # --- what the servers see (host.BridgeHost, host.CameraHost) ------------------------
 
     @property
-    def broker(self) -> Broker:
-        return self._broker
-
-    @property
     def world(self) -> WorldMap:
         return self._world
-
-    @property
-    def base(self) -> Base:
-        return self.body
 
     def client_connected(self) -> None:
         self.bridge.publish_client_count()
@@ -194,32 +185,32 @@ class SimRobot:
 
     def publish_external(self, topic: str, msg: dict[str, Any], count: int = 1) -> int:
         """Publish ``msg`` to the topic's subscribers as if a robot node sent it (benches inject bursts)."""
-        msg_type = self._broker.types.get(topic)
+        msg_type = self.broker.types.get(topic)
         if msg_type is not None and messages.known(msg_type):
             msg = messages.normalize(msg_type, msg)
         for _ in range(count):
-            self._broker.publish(topic, msg)
+            self.broker.publish(topic, msg)
         return count
 
     # --- introspection (tests, benches, /sim/introspect) --------------------------------
 
     def subscription_count(self, topic_name: str) -> int:
-        return self._broker.subscription_count(topic_name)
+        return self.broker.subscription_count(topic_name)
 
     def received(self, topic_name: str) -> list[dict[str, Any]]:
-        return [r.msg for r in self._broker.received(topic_name)]
+        return [r.msg for r in self.broker.received(topic_name)]
 
     def received_with_times(self, topic_name: str, last: int | None = None) -> list[dict[str, Any]]:
-        items = self._broker.received(topic_name)
+        items = self.broker.received(topic_name)
         if last is not None:
             items = items[-last:] if last > 0 else []
         return [{"t": r.t, "msg": r.msg} for r in items]
 
     def received_count(self, topic_name: str) -> int:
-        return self._broker.received_counts[topic_name]
+        return self.broker.received_counts[topic_name]
 
     def snapshot(self) -> dict[str, Any]:
-        b, w, broker = self.body, self._world, self._broker
+        b, w, broker = self.base, self._world, self.broker
         goal = self.move_base.current
         return {
             "subscriptions": {t: broker.subscription_count(t) for t in sorted(broker.subs)},
@@ -232,7 +223,7 @@ class SimRobot:
                     "resolution": w.resolution, "origin": [w.origin_x, w.origin_y]},
             "state": {
                 "pose": {"x": b.x, "y": b.y, "yaw": b.yaw}, "v": b.v, "w": b.w, "motors": b.motors,
-                "bumped": b.bumped, "battery": {"soc": self.soc, "voltage": self.voltage(),
+                "bumped": b.bumped, "battery": {"soc": self.soc, "voltage": self.base_node.voltage(),
                                                 "recharge_state": self.base_node.recharge_state},
                 "smach_state": self.sm.state, "smach_top": self.sm.top,
                 "emotion": {"name": self.emotions.name, "pad": list(self.emotions.pad)},
@@ -251,12 +242,6 @@ class SimRobot:
 
     def rosout(self, level: int, node: str, text: str) -> None:
         self.bus.rosout(level, node, text)
-
-    def navigate(self, x: float, y: float, yaw: float, done: Callable[[int], None] | None = None) -> Goal:
-        return self.nav_node.navigate(x, y, yaw, done)
-
-    def voltage(self) -> float:
-        return self.base_node.voltage()
 
     @property
     def rosout_log(self) -> collections.deque[dict[str, Any]]:
