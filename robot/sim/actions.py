@@ -35,14 +35,12 @@ class ActionServer:
     active goal is preempted (by a cancel or a newer goal)."""
 
     def __init__(self, name: str, action_type: str, publish: Callable[[str, dict[str, Any]], None],
-                 on_goal: Callable[[Goal], None], on_cancel: Callable[[Goal], None],
-                 empty_result: Callable[[], dict[str, Any]] | None = None) -> None:
+                 on_goal: Callable[[Goal], None], on_cancel: Callable[[Goal], None]) -> None:
         self.name = name
         self.type = action_type
         self.publish = publish
         self.on_goal = on_goal
         self.on_cancel = on_cancel
-        self.empty_result = empty_result or (lambda: messages.default(f"{action_type}Result"))
         self.goals: dict[str, Goal] = {}
         self.current: Goal | None = None
         self._ids = itertools.count(1)
@@ -97,8 +95,10 @@ class ActionServer:
         goal.status, goal.text, goal.finished_at = status, text, time.monotonic()
         if goal is self.current:
             self.current = None
+        if result is None:
+            result = messages.default(f"{self.type}Result")
         self.publish(f"{self.name}/result", {"header": messages.header(), "status": goal.goal_status(),
-                                             "result": result if result is not None else self.empty_result()})
+                                             "result": result})
         self.publish_status()
 
     def status_message(self) -> dict[str, Any]:

@@ -123,11 +123,9 @@ class Microphone:
         self._task: asyncio.Task[None] | None = None
 
     def info(self) -> dict[str, object]:
-        if self.coding == "mp3":
-            return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": MP3_KBPS,
-                    "coding_format": "mp3"}
-        return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": self.rate * 16,
-                "coding_format": "wave"}
+        bitrate = MP3_KBPS if self.coding == "mp3" else self.rate * 16
+        return {"channels": 1, "sample_rate": self.rate, "sample_format": "S16LE", "bitrate": bitrate,
+                "coding_format": self.coding}
 
     def encode(self, pcm: bytes) -> bytes:
         """One chunk as it goes on the topic (mp3: whatever the encoder has finished, maybe nothing)."""
