@@ -94,12 +94,12 @@ class Laser:
             active = active[inside & ~hit]
         return out
 
-    def message(self, x: float, y: float, yaw: float, frame: str = "laser") -> dict[str, Any]:
+    def message(self, x: float, y: float, yaw: float, frame: str = "laser", scan_time: float = 0.1) -> dict[str, Any]:
         """A ``sensor_msgs/LaserScan`` for a base at (x, y, yaw), stamped once its sweep is done."""
         ranges = self.ranges(x, y, yaw)
         return {
             "header": messages.header(frame), "angle_min": self.angle_min, "angle_max": self.angle_max,
-            "angle_increment": self.angle_increment, "time_increment": 0.0, "scan_time": 0.1,
+            "angle_increment": self.angle_increment, "time_increment": 0.0, "scan_time": scan_time,
             "range_min": self.range_min, "range_max": self.range_max,
             "ranges": [None if math.isnan(r) else round(float(r), 3) for r in ranges],
             "intensities": [],

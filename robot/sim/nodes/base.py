@@ -17,10 +17,6 @@ SONAR_X = 0.1  # the sonar ring's offset ahead of base_link
 SONAR_MAX_M = 5.0
 
 
-def _never() -> bool:
-    return False
-
-
 class BaseNode(SimNode):
     names = ("/RosAria", "/robot_pose_publisher")
     publishes = ("robot_pose", "odom", "tf", "tf_static", "sonar", "bumper_state", "battery_soc",
@@ -39,7 +35,7 @@ class BaseNode(SimNode):
         self.recharge_state = 0
         self.bumper_until = 0.0
         # The event scheduler's answer to a low battery: True once the controller took "power_low".
-        self.battery_low: Callable[[], bool] = _never
+        self.battery_low: Callable[[], bool] = lambda: False
         self._low_battery_fired = False
         self.odom_seq = 0  # header.seq, counted per publisher as roscpp does (a recorder can find gaps)
 

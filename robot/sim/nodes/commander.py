@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-from typing import Any
 
 from robot import interface as ri
 
@@ -23,11 +22,8 @@ class CommanderNode(SimNode):
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        bus.on("robot_mode", self._robot_mode)
+        bus.on("robot_mode", lambda m: self._queue.put_nowait(m["data"]))
         bus.spawn(self._run())
-
-    def _robot_mode(self, m: dict[str, Any]) -> None:
-        self._queue.put_nowait(m["data"])
 
     async def _run(self) -> None:
         while True:

@@ -31,6 +31,4 @@ class LaserNode(SimNode):
 
     def _publish(self) -> None:
         b = self.body
-        msg = self.laser.message(b.x, b.y, b.yaw)
-        msg["scan_time"] = 1.0 / self.rate_hz
-        self.bus.publish("scan", msg)
+        self.bus.publish("scan", self.laser.message(b.x, b.y, b.yaw, scan_time=1.0 / self.rate_hz))
