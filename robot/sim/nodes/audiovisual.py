@@ -14,7 +14,8 @@ class AudioVisualNode(SimNode):
 
     def __init__(self, tts_s_per_char: float, tts_min_s: float, clip_s: float, mic_tone_hz: float,
                  mic_coding: str = "wave") -> None:
-        self.audio = Audio(self._on_spoken, self._on_played, tts_s_per_char, tts_min_s, clip_s)
+        self.audio = Audio(self._on_spoken, lambda clip: self.bus.publish("playback_feedback", {"data": clip}),
+                           tts_s_per_char, tts_min_s, clip_s)
         self.mic = Microphone(lambda m: self.bus.publish("audio", m), lambda: self.bus.wants("audio"),
                               freq_hz=mic_tone_hz, coding=mic_coding)
         self.speaker = Speaker()
@@ -46,6 +47,3 @@ class AudioVisualNode(SimNode):
     def _on_spoken(self, text: str) -> None:
         self.bus.rosout(2, "/cyborg_audio", f"Finished speaking: {text}")
         self.bus.publish("tts_feedback", {"data": text})
-
-    def _on_played(self, clip: str) -> None:
-        self.bus.publish("playback_feedback", {"data": clip})

@@ -50,7 +50,7 @@ class BaseNode(SimNode):
         bus.every(0.2, self._pub_sonar, wanted="sonar")
         bus.every(0.5, self._pub_bumper)
         bus.every(1.0, self._pub_battery)
-        bus.every(1.0, self._pub_motors)
+        bus.every(1.0, lambda: bus.publish("motors_state", {"data": self.body.motors}))
         bus.publish("tf_static", {"transforms": [
             transform("base_link", "laser", 0.2, 0.0, 0.0),
             transform("base_link", "sonar", SONAR_X, 0.0, 0.0),
@@ -147,6 +147,3 @@ class BaseNode(SimNode):
         self.bus.publish("battery_soc", {"data": self.soc})
         self.bus.publish("battery_voltage", {"data": self.voltage() + self.rng.gauss(0, 0.02)})
         self.bus.publish("battery_recharge_state", {"data": self.recharge_state})
-
-    def _pub_motors(self) -> None:
-        self.bus.publish("motors_state", {"data": self.body.motors})

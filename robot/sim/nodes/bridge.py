@@ -48,7 +48,7 @@ class BridgeNode(SimNode):
         bus.answer_name("/rosapi/has_param", "rosapi/HasParam", lambda r: {"exists": r["name"] in self.params})
         bus.answer_name("/rosapi/get_param_names", "rosapi/GetParamNames", lambda r: {"names": sorted(self.params)})
         bus.answer_name("/rosapi/message_details", "rosapi/MessageDetails", self._message_details)
-        bus.every(8.0, self._chatter)
+        bus.every(8.0, lambda: bus.rosout(2, *self.rng.choice(CHATTER)))
         self.publish_client_count()
 
     def publish_client_count(self) -> None:
@@ -72,7 +72,3 @@ class BridgeNode(SimNode):
         if not messages.known(r["type"]):
             raise ServiceError(f"Unable to load the manifest for message type {r['type']}")
         return {"typedefs": messages.typedefs(r["type"])}
-
-    def _chatter(self) -> None:
-        node, text = self.rng.choice(CHATTER)
-        self.bus.rosout(2, node, text)

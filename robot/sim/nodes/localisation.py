@@ -9,7 +9,8 @@ from robot import interface as ri
 from .. import messages
 from ..bus import Bus, SimNode
 from ..localisation import ParticleCloud
-from ..world import Base, yaw_to_quaternion
+from ..world import Base
+from .shapes import pose
 
 
 class LocalisationNode(SimNode):
@@ -26,14 +27,10 @@ class LocalisationNode(SimNode):
     def start(self, bus: Bus) -> None:
         super().start(bus)
         bus.on("initialpose", lambda m: self.cloud.initial_pose())
-        bus.each_tick(self._step)
+        bus.each_tick(lambda now, dt: self.cloud.step(dt, moving=self.body.v != 0.0 or self.body.w != 0.0))
         bus.every(1.0 / self.rate_hz, self._publish, wanted="particlecloud")
-
-    def _step(self, now: float, dt: float) -> None:
-        self.cloud.step(dt, moving=self.body.v != 0.0 or self.body.w != 0.0)
 
     def _publish(self) -> None:
         b = self.body
-        poses = [{"position": {"x": x, "y": y, "z": 0.0}, "orientation": yaw_to_quaternion(yaw)}
-                 for x, y, yaw in self.cloud.poses(b.x, b.y, b.yaw)]
+        poses = [pose(x, y, yaw) for x, y, yaw in self.cloud.poses(b.x, b.y, b.yaw)]
         self.bus.publish("particlecloud", {"header": messages.header(ri.MAP_FRAME), "poses": poses})
