@@ -172,7 +172,7 @@ class Bus:
 
     # --- clock -----------------------------------------------------------------------------
 
-    def every(self, period_s: float, fn: Callable[[], None], wanted: str | None = None) -> None:
+    def every(self, period_s: float, fn: Callable[[], object], wanted: str | None = None) -> None:
         """Call ``fn()`` every ``period_s`` seconds of the simulator's tick; with ``wanted`` (a topic
         key), only while anyone subscribes to it, so a costly message is only built for a listener."""
 

@@ -347,9 +347,9 @@ class Client:
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", _STR)])
         topic = frame["topic"]
-        subs = self.broker.subs.get(topic)
-        sub = subs.get(self.id) if subs else None
-        if subs is None or sub is None:
+        subs = self.broker.subs.get(topic, {})
+        sub = subs.get(self.id)
+        if sub is None:
             return
         if mid is None:
             sub.params.clear()

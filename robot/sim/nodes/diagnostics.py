@@ -113,10 +113,7 @@ class DiagnosticsNode(SimNode):
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        bus.every(POLL_S, self._poll)
-
-    def _poll(self) -> None:
-        self.publisher.poll(self.bus.clock.now())
+        bus.every(POLL_S, lambda: self.publisher.poll(self.bus.clock.now()))
 
     def read(self) -> Reading:
         base, b = self.base, self.base.body
