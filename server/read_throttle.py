@@ -19,23 +19,10 @@ from typing import Any
 
 from django.conf import settings
 
+from robot.uplink.limits import Bucket
+
 EXEMPT_PREFIXES = ("/static/", "/healthz")
 KEPT_CALLERS = 10_000
-
-
-class Bucket:
-    __slots__ = ("at", "tokens")
-
-    def __init__(self, burst: float, now: float) -> None:
-        self.tokens = burst
-        self.at = now
-
-    def wait_for_token(self, rate: float, burst: float, now: float) -> float:
-        """Take a token; the seconds until it is really there (0 when there was one)."""
-        self.tokens = min(burst, self.tokens + (now - self.at) * rate)
-        self.at = now
-        self.tokens -= 1
-        return 0.0 if self.tokens >= 0 else -self.tokens / rate
 
 
 def caller(scope: dict[str, Any]) -> str:

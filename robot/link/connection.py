@@ -32,10 +32,10 @@ log = logging.getLogger(__name__)
 FIRST_CONNECT_S = 3.0
 
 # Called with the link as it starts, before its first message (modules that listen to every topic).
-_start_hooks: list[Callable[[RobotLink], None]] = []
+_start_hooks: list[Callable[[RobotLink], object]] = []
 
 
-def register_start(hook: Callable[[RobotLink], None]) -> None:
+def register_start(hook: Callable[[RobotLink], object]) -> None:
     if hook not in _start_hooks:
         _start_hooks.append(hook)
 

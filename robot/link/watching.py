@@ -21,6 +21,7 @@ import asyncio
 import itertools
 import logging
 import time
+from collections.abc import Awaitable
 from typing import Any
 
 import numpy as np
@@ -250,8 +251,11 @@ def _bulky(msg: dict[str, Any]) -> bool:
 watches_of = one_per_link(Watches)
 
 
-def _refusal(exc: TopicRefused) -> LinkReply:
-    return {"ok": False, "error_code": exc.code, "error": exc.message}
+async def _answer(values: Awaitable[Any]) -> LinkReply:
+    try:
+        return {"ok": True, "values": await values}
+    except TopicRefused as exc:
+        return {"ok": False, "error_code": exc.code, "error": exc.message}
 
 
 async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
@@ -262,28 +266,14 @@ async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
     return {"ok": True, "refused": refused}
 
 
-async def _list(link: RobotLink, request: LinkRequest) -> LinkReply:
-    try:
-        return {"ok": True, "values": await watches_of(link).listing()}
-    except TopicRefused as exc:
-        return _refusal(exc)
-
-
 async def _rate(link: RobotLink, request: LinkRequest) -> LinkReply:
     low, high = RATE_WINDOW_S
     window = min(high, max(low, float(request.get("window_s") or 2.0)))
-    try:
-        return {"ok": True, "values": await watches_of(link).rate(str(request.get("topic") or ""), window)}
-    except TopicRefused as exc:
-        return _refusal(exc)
-
-
-def _on_start(link: RobotLink) -> None:
-    watches_of(link)  # listening before the first message: a latched one is never missed
+    return await _answer(watches_of(link).rate(str(request.get("topic") or ""), window))
 
 
 def install() -> None:
-    register_start(_on_start)
+    register_start(watches_of)  # listening before the first message: a latched one is never missed
     register_operation("topics_watch", _watch)
-    register_operation("topics_list", _list)
+    register_operation("topics_list", lambda link, request: _answer(watches_of(link).listing()))
     register_operation("topics_rate", _rate)

@@ -29,8 +29,9 @@ from websockets.http11 import Request, Response
 
 from cyborg_site.client_address import is_trusted_proxy
 from robot.uplink import credentials
-from robot.uplink.limits import Attempts, Rate
+from robot.uplink.limits import Attempts, Bucket
 from robot.uplink.relays import Relays
+from robot.uplink.status import clock
 from robot.uplink.tunnel import Tunnel
 from uplink_agent import mux
 
@@ -157,7 +158,7 @@ class UplinkEndpoint:
                 old.ending = f"taken over by {address}"
                 await self._end(old)
                 await _audit("uplink.takeover", ok=True, address=address, params=params,
-                             outcome=f"took over from {old.address} (connected since {_clock(old.since)})")
+                             outcome=f"took over from {old.address} (connected since {clock(old.since)})")
             live = self.live = Live(connection, accepted, address, time.time(), Tunnel(connection))
             await self.relays.start(live.tunnel)
         log.info("robot %s connected through its uplink from %s", self.robot, address)
@@ -177,9 +178,10 @@ class UplinkEndpoint:
             await _audit("uplink.disconnect", ok=True, address=address, outcome=why, params=params)
 
     async def _carry(self, live: Live) -> None:
-        rate = Rate(self.max_messages_per_s)
+        rate = self.max_messages_per_s  # with a second's worth of burst
+        bucket = Bucket(rate, time.monotonic())
         async for message in live.connection:
-            if not rate.allow():
+            if bucket.wait_for_token(rate, rate, time.monotonic()):
                 await self._close(live, TOO_FAST, f"over {self.max_messages_per_s} messages a second")
                 return
             if isinstance(message, str):
@@ -227,7 +229,3 @@ def _close_text(connection: ServerConnection) -> str:
     if code is None:
         return "connection lost"
     return f"closed ({code}{': ' + connection.close_reason if connection.close_reason else ''})"
-
-
-def _clock(epoch: float) -> str:
-    return time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(epoch))

@@ -1,26 +1,26 @@
-"""The uplink endpoint's limits that are not the websocket library's own (frame size, handshake time)."""
+"""Limits that are not a library's own: a token bucket (the uplink endpoint's message rate, the web
+process's read throttle, ``server.read_throttle``) and refused attempts per address."""
 
 from __future__ import annotations
 
 import time
 
 
-class Rate:
-    """At most ``per_s`` messages a second, with a second's worth of burst (a token bucket)."""
+class Bucket:
+    """A token bucket: ``rate`` tokens a second, at most ``burst`` kept."""
 
-    def __init__(self, per_s: float) -> None:
-        self.per_s = per_s
-        self.tokens = per_s
-        self.at = time.monotonic()
+    __slots__ = ("at", "tokens")
 
-    def allow(self) -> bool:
-        now = time.monotonic()
-        self.tokens = min(self.per_s, self.tokens + (now - self.at) * self.per_s)
+    def __init__(self, burst: float, now: float) -> None:
+        self.tokens = burst
         self.at = now
-        if self.tokens < 1:
-            return False
+
+    def wait_for_token(self, rate: float, burst: float, now: float) -> float:
+        """Take a token; the seconds until it is really there (0 when there was one)."""
+        self.tokens = min(burst, self.tokens + (now - self.at) * rate)
+        self.at = now
         self.tokens -= 1
-        return True
+        return 0.0 if self.tokens >= 0 else -self.tokens / rate
 
 
 class Attempts:
