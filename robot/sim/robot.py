@@ -20,12 +20,10 @@ from typing import Any, TypeVar
 from robot import interface as ri
 
 from . import messages
-from .actions import ActionServer
-from .audio import Audio, Microphone, Speaker
+from .audio import Microphone, Speaker
 from .bus import Bus, Clock, Node
 from .camera import VideoServer
 from .emotions import EmotionSystem
-from .navigation import Navigator
 from .nodes.audiovisual import AudioVisualNode
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
@@ -41,7 +39,7 @@ from .nodes.navigation import NavigationNode
 from .protocol import Broker
 from .server import RosbridgeServer
 from .statemachine import StateMachine
-from .world import Base, WorldMap, build
+from .world import Base, build
 
 log = logging.getLogger("robot.sim")
 N = TypeVar("N", bound=Node)
@@ -78,9 +76,9 @@ class SimRobot:
         self.seed = seed
         self.tick_s = 1.0 / tick_hz
         self.rng = random.Random(seed)
-        self._world = build(map_name, seed)
-        x, y, yaw = self._world.start
-        self.base = Base(self._world, x, y, yaw)  # the servers see base, world and broker (host.py)
+        self.world = build(map_name, seed)
+        x, y, yaw = self.world.start
+        self.base = Base(self.world, x, y, yaw)  # the servers see base, world and broker (host.py)
         self.clock = Clock(time_scale)
         self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
         self.bus = Bus(self.broker, self.clock)
@@ -91,12 +89,12 @@ class SimRobot:
         self._started = False
         self.bridge = BridgeNode(self.rng)
         # Added in tick order: physics, then navigation, emotions, state timers.
-        self.base_node = self.add(BaseNode(self.base, self._world, self.rng, pose_rate_hz, battery_soc,
+        self.base_node = self.add(BaseNode(self.base, self.world, self.rng, pose_rate_hz, battery_soc,
                                            battery_drain_per_s, battery_charge_per_s))
-        self.nav_node = self.add(NavigationNode(self.base, self._world, self.rng, nav_speed))
+        self.nav_node = self.add(NavigationNode(self.base, self.world, self.rng, nav_speed))
         self.add(LocalisationNode(self.base, self.rng))
-        self.add(LaserNode(self.base, self._world))
-        self.add(CostmapNode(self.base, self._world, lambda: self.nav_node.navigator.active))
+        self.add(LaserNode(self.base, self.world))
+        self.add(CostmapNode(self.base, self.world, lambda: self.nav_node.navigator.active))
         self.emotion_node = self.add(EmotionNode(self.rng))
         self.av_node = self.add(AudioVisualNode(tts_s_per_char, tts_min_s, clip_s, mic_tone_hz, mic_coding))
         self.controller = self.add(ControllerNode(self.rng, self.nav_node, self.av_node, self.emotion_node,
@@ -170,10 +168,6 @@ class SimRobot:
 
     # --- what the servers see (host.BridgeHost, host.CameraHost) ------------------------
 
-    @property
-    def world(self) -> WorldMap:
-        return self._world
-
     def client_connected(self) -> None:
         self.bridge.publish_client_count()
 
@@ -210,8 +204,8 @@ class SimRobot:
         return self.broker.received_counts[topic_name]
 
     def snapshot(self) -> dict[str, Any]:
-        b, w, broker = self.base, self._world, self.broker
-        goal = self.move_base.current
+        b, w, broker, nav, av, base = self.base, self.world, self.broker, self.nav_node, self.av_node, self.base_node
+        goal = nav.move_base.current
         return {
             "subscriptions": {t: broker.subscription_count(t) for t in sorted(broker.subs)},
             "received_counts": dict(broker.received_counts),
@@ -223,15 +217,15 @@ class SimRobot:
                     "resolution": w.resolution, "origin": [w.origin_x, w.origin_y]},
             "state": {
                 "pose": {"x": b.x, "y": b.y, "yaw": b.yaw}, "v": b.v, "w": b.w, "motors": b.motors,
-                "bumped": b.bumped, "battery": {"soc": self.soc, "voltage": self.base_node.voltage(),
-                                                "recharge_state": self.base_node.recharge_state},
+                "bumped": b.bumped, "battery": {"soc": base.soc, "voltage": base.voltage(),
+                                                "recharge_state": base.recharge_state},
                 "smach_state": self.sm.state, "smach_top": self.sm.top,
                 "emotion": {"name": self.emotions.name, "pad": list(self.emotions.pad)},
-                "emotion_system": self.emotions.enabled, "mode": self.mode, "dome": self.dome_mode,
-                "tts_queue": self.audio.pending(), "tts_spoken": self.audio.done_count,
-                "playing": self.audio.playing, "current_location": self.current_location,
+                "emotion_system": self.emotions.enabled, "mode": self.commander.mode, "dome": av.dome_mode,
+                "tts_queue": av.audio.pending(), "tts_spoken": av.audio.done_count,
+                "playing": av.audio.playing, "current_location": nav.current_location,
                 "goal": None if goal is None else {"id": goal.id, "status": goal.status},
-                "navigating": self.navigator.active,
+                "navigating": nav.navigator.active,
             },
         }
 
@@ -248,20 +242,12 @@ class SimRobot:
         return self.bus.rosout_log
 
     @property
-    def soc(self) -> float:
-        return self.base_node.soc
-
-    @property
     def sm(self) -> StateMachine:
         return self.controller.sm
 
     @property
     def emotions(self) -> EmotionSystem:
         return self.emotion_node.emotions
-
-    @property
-    def audio(self) -> Audio:
-        return self.av_node.audio
 
     @property
     def mic(self) -> Microphone:
@@ -271,26 +257,3 @@ class SimRobot:
     def speaker(self) -> Speaker:
         return self.av_node.speaker
 
-    @property
-    def dome_mode(self) -> str:
-        return self.av_node.dome_mode
-
-    @property
-    def mode(self) -> str:
-        return self.commander.mode
-
-    @property
-    def navigator(self) -> Navigator:
-        return self.nav_node.navigator
-
-    @property
-    def move_base(self) -> ActionServer:
-        return self.nav_node.move_base
-
-    @property
-    def current_location(self) -> str:
-        return self.nav_node.current_location
-
-    @property
-    def params(self) -> dict[str, Any]:
-        return self.bridge.params

@@ -55,7 +55,7 @@ def test_a_bump_shows_on_the_bumpers_and_in_the_diagnostics(sim, ros):
 
 
 def test_sonar_echoes_come_from_the_maps_walls(sim, ros):
-    world = sim.robot._world
+    world = sim.robot.world
     set_pose(ros, sim, 5.0, -6.2, -math.pi / 2)
     sonar = sub(ros, "sonar")
     msg = sonar.wait(lambda items: items and items[-1])
