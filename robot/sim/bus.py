@@ -135,9 +135,6 @@ class Bus:
         """Whether anyone subscribes to ``key``: costly messages are only built for a listener."""
         return self.broker.wants(ri.topic(key).name)
 
-    def wants_name(self, name: str) -> bool:
-        return self.broker.wants(name)
-
     def announce(self, key: str, msg: dict[str, Any]) -> None:
         """A node publishing on a topic other nodes listen to: subscribers and in-process handlers get it."""
         name = ri.topic(key).name
@@ -147,28 +144,28 @@ class Bus:
 
     def on(self, key: str, handler: Handler) -> None:
         """Call ``handler(msg)`` for every message a client (or ``announce``) publishes on ``key``."""
-        self.broker.on_publish(ri.topic(key).name, handler)
+        self.on_name(ri.topic(key).name, handler)
 
     def on_name(self, name: str, handler: Handler) -> None:
-        self.broker.on_publish(name, handler)
+        self.broker.handlers[name].append(handler)
 
     def declare(self, name: str, msg_type: str) -> None:
         """Make a topic the interface does not list known to rosapi and to clients."""
-        self.broker.declare(name, msg_type)
+        self.broker.types[name] = msg_type
 
     def latch_lazily(self, key: str, build: Callable[[], dict[str, Any]]) -> None:
         """A latched topic whose (large) message is only built when first needed."""
-        self.broker.publish_lazily_latched(ri.topic(key).name, build)
+        self.broker.lazy_latched[ri.topic(key).name] = build
 
     # --- services ------------------------------------------------------------------------
 
     def answer(self, key: str, handler: ServiceHandler) -> None:
         """Answer the interface service ``key``; raise ``protocol.ServiceError`` to fail a call."""
         s = ri.service(key)
-        self.broker.service(s.name, s.type, handler)
+        self.answer_name(s.name, s.type, handler)
 
     def answer_name(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
-        self.broker.service(name, srv_type, handler)
+        self.broker.services[name] = (srv_type, handler)
 
     # --- clock -----------------------------------------------------------------------------
 

@@ -97,6 +97,10 @@ class Renderer:
         return out.getvalue()
 
 
+def _json(obj: Any, status: str = "200 OK") -> tuple[str, str, bytes]:
+    return status, "application/json", json.dumps(obj).encode()
+
+
 def _int(q: dict[str, list[str]], name: str, default: int) -> int:
     try:
         return int(q.get(name, [default])[0])
@@ -153,54 +157,49 @@ class VideoServer:
             self.writers.discard(writer)
             writer.close()
 
-    async def _respond(self, writer: asyncio.StreamWriter, status: str, ctype: str, body: bytes) -> None:
+    async def _route(self, method: str, path: str, q: dict[str, list[str]], body: bytes,
+                     writer: asyncio.StreamWriter) -> None:
+        if (method, path) == ("GET", "/stream") and q.get("type", ["mjpeg"])[0] == "mjpeg":
+            await self._stream(writer, _int(q, "width", 640), _int(q, "height", 480), _int(q, "quality", 80))
+            return
+        status, ctype, data = await self._page(method, path, q, body)
         writer.write(
             f"HTTP/1.0 {status}\r\nServer: web_video_server (simulated)\r\nContent-Type: {ctype}\r\n"
-            f"Content-Length: {len(body)}\r\nAccess-Control-Allow-Origin: *\r\nConnection: close\r\n\r\n"
-            .encode() + body
+            f"Content-Length: {len(data)}\r\nAccess-Control-Allow-Origin: *\r\nConnection: close\r\n\r\n"
+            .encode() + data
         )
         await writer.drain()
 
-    async def _json(self, writer: asyncio.StreamWriter, obj: Any, status: str = "200 OK") -> None:
-        await self._respond(writer, status, "application/json", json.dumps(obj).encode())
-
-    async def _route(self, method: str, path: str, q: dict[str, list[str]], body: bytes,
-                     writer: asyncio.StreamWriter) -> None:
+    async def _page(self, method: str, path: str, q: dict[str, list[str]], body: bytes) -> tuple[str, str, bytes]:
+        """(status, content type, body) of every route but a stream."""
         robot = self.robot
         if method == "GET" and path == "/stream":
-            if q.get("type", ["mjpeg"])[0] != "mjpeg":
-                await self._respond(writer, "501 Not Implemented", "text/plain", b"only mjpeg is simulated\n")
-                return
-            await self._stream(writer, _int(q, "width", 640), _int(q, "height", 480), _int(q, "quality", 80))
-        elif method == "GET" and path == "/snapshot":
+            return "501 Not Implemented", "text/plain", b"only mjpeg is simulated\n"
+        if method == "GET" and path == "/snapshot":
             jpeg = await asyncio.to_thread(self.renderer.frame, _int(q, "width", 640), _int(q, "height", 480),
                                            _int(q, "quality", 80))
-            await self._respond(writer, "200 OK", "image/jpeg", jpeg)
-        elif method == "GET" and path == "/stream_viewer":
+            return "200 OK", "image/jpeg", jpeg
+        if method == "GET" and path == "/stream_viewer":
             topic = q.get("topic", [""])[0]
             html = f"<html><body><h1>{topic}</h1><img src='/stream?topic={topic}'></body></html>"
-            await self._respond(writer, "200 OK", "text/html", html.encode())
-        elif method == "GET" and path == "/":
-            html = "<html><body><h1>Available ROS Image Topics:</h1><ul><li><a href='/stream_viewer?topic=" \
-                   "/videostream'>/videostream</a></li></ul></body></html>"
-            await self._respond(writer, "200 OK", "text/html", html.encode())
-        elif method == "GET" and path == "/sim/introspect":
-            await self._json(writer, robot.snapshot())
-        elif method == "GET" and path == "/sim/received":
+            return "200 OK", "text/html", html.encode()
+        if method == "GET" and path == "/":
+            return "200 OK", "text/html", (b"<html><body><h1>Available ROS Image Topics:</h1><ul><li><a href="
+                                           b"'/stream_viewer?topic=/videostream'>/videostream</a></li></ul></body></html>")
+        if method == "GET" and path == "/sim/introspect":
+            return _json(robot.snapshot())
+        if method == "GET" and path == "/sim/received":
             topic = q.get("topic", [""])[0]
-            last = _int(q, "last", 100)
-            await self._json(writer, {"count": robot.received_count(topic),
-                                      "messages": robot.received_with_times(topic, last)})
-        elif method == "POST" and path == "/sim/publish":
+            return _json({"count": robot.received_count(topic),
+                          "messages": robot.received_with_times(topic, _int(q, "last", 100))})
+        if method == "POST" and path == "/sim/publish":
             try:
                 req = json.loads(body or b"{}")
-                n = robot.publish_external(req["topic"], req.get("msg", {}), int(req.get("count", 1)))
+                return _json({"published": robot.publish_external(req["topic"], req.get("msg", {}),
+                                                                  int(req.get("count", 1)))})
             except Exception as exc:  # a bench's malformed request: tell it why
-                await self._json(writer, {"error": str(exc)}, "400 Bad Request")
-                return
-            await self._json(writer, {"published": n})
-        else:
-            await self._respond(writer, "404 Not Found", "text/plain", b"not found\n")
+                return _json({"error": str(exc)}, "400 Bad Request")
+        return "404 Not Found", "text/plain", b"not found\n"
 
     async def _stream(self, writer: asyncio.StreamWriter, width: int, height: int, quality: int) -> None:
         writer.write(
@@ -211,16 +210,13 @@ class VideoServer:
         )
         self.streams += 1
         try:
-            await self._frames(writer, width, height, quality)
+            while True:
+                jpeg = await asyncio.to_thread(self.renderer.frame, width, height, quality)
+                writer.write(
+                    f"--{BOUNDARY}\r\nContent-type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n"
+                    f"X-Timestamp: {time.time():.6f}\r\n\r\n".encode() + jpeg + b"\r\n"
+                )
+                await writer.drain()
+                await asyncio.sleep(1.0 / FPS)
         finally:
             self.streams -= 1
-
-    async def _frames(self, writer: asyncio.StreamWriter, width: int, height: int, quality: int) -> None:
-        while True:
-            jpeg = await asyncio.to_thread(self.renderer.frame, width, height, quality)
-            writer.write(
-                f"--{BOUNDARY}\r\nContent-type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n"
-                f"X-Timestamp: {time.time():.6f}\r\n\r\n".encode() + jpeg + b"\r\n"
-            )
-            await writer.drain()
-            await asyncio.sleep(1.0 / FPS)

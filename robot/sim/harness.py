@@ -31,7 +31,8 @@ class SimThread:
     # --- lifecycle -------------------------------------------------------------------
 
     def start(self, timeout: float = 30.0) -> SimThread:
-        self._thread = threading.Thread(target=self._run, name=f"simrobot-{id(self):x}", daemon=True)
+        self._thread = threading.Thread(target=asyncio.run, args=(self._main(),), name=f"simrobot-{id(self):x}",
+                                        daemon=True)
         self._thread.start()
         if not self._ready.wait(timeout):
             raise TimeoutError("simulator did not start")
@@ -39,15 +40,8 @@ class SimThread:
             raise RuntimeError("simulator failed to start") from self._error
         return self
 
-    def _run(self) -> None:
-        loop = self.loop = asyncio.new_event_loop()
-        asyncio.set_event_loop(loop)
-        try:
-            loop.run_until_complete(self._main())
-        finally:
-            loop.close()
-
     async def _main(self) -> None:
+        self.loop = asyncio.get_running_loop()
         self._stopped = asyncio.Event()
         try:
             await self.robot.start()

@@ -53,7 +53,6 @@ class Subscription:
     topic: str
     params: dict[Any, tuple[int, int]] = field(default_factory=dict)  # sid -> (throttle ms, queue length)
     throttle_s: float = 0.0
-    queue_length: int = 0
     last_sent: float = 0.0
     queue: collections.deque[str] | None = None
     wake: asyncio.Event | None = None
@@ -61,10 +60,9 @@ class Subscription:
 
     def update(self) -> None:
         self.throttle_s = min(p[0] for p in self.params.values()) / 1000.0
-        self.queue_length = min(p[1] for p in self.params.values())
-        if self.queue_length > 0:
-            old = list(self.queue or ())
-            self.queue = collections.deque(old, maxlen=self.queue_length)
+        queue_length = min(p[1] for p in self.params.values())
+        if queue_length > 0:
+            self.queue = collections.deque(self.queue or (), maxlen=queue_length)
             if self.pump is None:
                 self.wake = asyncio.Event()
                 self.pump = asyncio.get_running_loop().create_task(self._run_pump())
@@ -110,7 +108,7 @@ class Broker:
         self.types: dict[str, str] = {}
         self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
         self.latched: dict[str, str] = {}
-        self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}
+        self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}  # built for the first subscriber
         self.handlers: dict[str, list[Callable[[dict[str, Any]], object]]] = collections.defaultdict(list)
         self.received_msgs: dict[str, collections.deque[Received]] = collections.defaultdict(
             lambda: collections.deque(maxlen=RECEIVED_KEEP))
@@ -125,9 +123,6 @@ class Broker:
 
     # --- robot side ------------------------------------------------------------------
 
-    def declare(self, topic: str, msg_type: str) -> None:
-        self.types[topic] = msg_type
-
     def wants(self, topic: str) -> bool:
         return bool(self.subs.get(topic))
 
@@ -141,21 +136,11 @@ class Broker:
         for sub in list(subs.values()) if subs else ():
             sub.offer(frame)
 
-    def publish_lazily_latched(self, topic: str, build: Callable[[], dict[str, Any]]) -> None:
-        """A latched topic whose (large) message is only built when someone subscribes."""
-        self.lazy_latched[topic] = build
-
     def latched_frame(self, topic: str) -> str | None:
         if topic not in self.latched and topic in self.lazy_latched:
             msg = self.lazy_latched.pop(topic)()
             self.latched[topic] = messages.encode({"op": "publish", "topic": topic, "msg": msg})
         return self.latched.get(topic)
-
-    def on_publish(self, topic: str, handler: Callable[[dict[str, Any]], object]) -> None:
-        self.handlers[topic].append(handler)
-
-    def service(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
-        self.services[name] = (srv_type, handler)
 
     # --- introspection ---------------------------------------------------------------
 
@@ -170,14 +155,18 @@ class Broker:
     def connect(self, client: Client) -> None:
         self.clients[client.id] = client
 
+    def unsubscribe(self, client_id: int, topic: str) -> None:
+        """End a client's subscription to ``topic`` (every id it subscribed with)."""
+        sub = self.subs[topic].pop(client_id, None)
+        if sub:
+            sub.stop()
+        if not self.subs[topic]:
+            del self.subs[topic]
+
     def disconnect(self, client: Client) -> None:
         self.clients.pop(client.id, None)
         for topic in list(self.subs):
-            sub = self.subs[topic].pop(client.id, None)
-            if sub:
-                sub.stop()
-            if not self.subs[topic]:
-                del self.subs[topic]
+            self.unsubscribe(client.id, topic)
         for pubs in self.publishers.values():
             pubs.discard(client.id)
         for name, (owner, _) in list(self.client_services.items()):
@@ -255,6 +244,11 @@ class Client:
 
     def reply(self, frame: dict[str, Any]) -> None:
         self.send(messages.encode(frame))
+
+    def respond(self, mid: Any, service: str, values: Any, ok: bool) -> None:
+        """A ``service_response`` frame, with the caller's id if it gave one."""
+        self.reply({"op": "service_response", "service": service, "values": values, "result": ok,
+                    **({} if mid is None else {"id": mid})})
 
     # --- input -----------------------------------------------------------------------
 
@@ -347,8 +341,7 @@ class Client:
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", _STR)])
         topic = frame["topic"]
-        subs = self.broker.subs.get(topic, {})
-        sub = subs.get(self.id)
+        sub = self.broker.subs.get(topic, {}).get(self.id)
         if sub is None:
             return
         if mid is None:
@@ -358,10 +351,7 @@ class Client:
         if sub.params:
             sub.update()
         else:
-            sub.stop()
-            del subs[self.id]
-            if not subs:
-                del self.broker.subs[topic]
+            self.broker.unsubscribe(self.id, topic)
 
     def op_call_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", _STR), (False, "fragment_size", _INT), (False, "compression", _STR)])
@@ -385,10 +375,7 @@ class Client:
         except (ServiceError, messages.ConversionError) as exc:
             self.log(8, f"call_service {type(exc).__name__}: {exc}", mid)
             values, ok = str(exc), False
-        out: dict[str, Any] = {"op": "service_response", "service": name, "values": values, "result": ok}
-        if mid is not None:
-            out["id"] = mid
-        self.reply(out)
+        self.respond(mid, name, values, ok)
 
     def op_advertise_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", _STR), (True, "type", _STR)])
@@ -406,11 +393,7 @@ class Client:
         if pending is None:
             return
         caller, caller_id, name = pending
-        out: dict[str, Any] = {"op": "service_response", "service": name, "values": frame.get("values", {}),
-                               "result": frame["result"]}
-        if caller_id is not None:
-            out["id"] = caller_id
-        caller.reply(out)
+        caller.respond(caller_id, name, frame.get("values", {}), frame["result"])
 
     def op_fragment(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "id", _STR), (True, "data", _STR), (True, "num", _INT), (True, "total", _INT)])

@@ -174,9 +174,6 @@ class Planner:
     def to_cell(self, x: float, y: float) -> tuple[int, int]:
         return int((y - self.world.origin_y) / self.res), int((x - self.world.origin_x) / self.res)
 
-    def to_xy(self, r: int, c: int) -> tuple[float, float]:
-        return self.world.origin_x + (c + 0.5) * self.res, self.world.origin_y + (r + 0.5) * self.res
-
     def plan(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]] | None:
         sr, sc = self.to_cell(*start)
         gr, gc = self.to_cell(*goal)
@@ -221,8 +218,8 @@ class Planner:
         while cells[-1] != (sr, sc):
             cells.append(came[cells[-1]])
         cells.reverse()
-        path = [start] + [self.to_xy(r, c) for r, c in cells[1:-1]] + [goal]
-        return path
+        ox, oy = self.world.origin_x, self.world.origin_y
+        return [start] + [(ox + (c + 0.5) * self.res, oy + (r + 0.5) * self.res) for r, c in cells[1:-1]] + [goal]
 
 
 def wrap(angle: float) -> float:
@@ -277,20 +274,17 @@ class Base:
         if self.v == 0.0 and self.w == 0.0:
             self.bumped = False
             return False
-        yaw = wrap(self.yaw + self.w * dt)
         mid = self.yaw + self.w * dt / 2
         nx = self.x + self.v * math.cos(mid) * dt
         ny = self.y + self.v * math.sin(mid) * dt
-        self.yaw = yaw
+        self.yaw = wrap(self.yaw + self.w * dt)
         self.odom_yaw = wrap(self.odom_yaw + self.w * dt)
-        if self.v != 0.0 and not self.world.footprint_free(nx, ny) and self.world.footprint_free(
-            self.x + 0.0, self.y + 0.0
-        ):
-            self.v = 0.0
-            newly = not self.bumped
-            self.bumped = True
-            return newly
         if self.v != 0.0 and not self.world.footprint_free(nx, ny):
+            if self.world.footprint_free(self.x, self.y):
+                self.v = 0.0
+                newly = not self.bumped
+                self.bumped = True
+                return newly
             # already touching something: allow only moves that do not go deeper
             if self._clearance(nx, ny) < self._clearance(self.x, self.y):
                 self.v = 0.0

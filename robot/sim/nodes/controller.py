@@ -78,9 +78,16 @@ class ControllerNode(SimNode):
         return True
 
     def _step(self, now: float, dt: float) -> None:
-        if self._state_deadline is not None and now >= self._state_deadline:
-            self._state_deadline = None
-            self._state_timer()
+        """The state timer: a timed state ends, or navigation_planning picks its leaf."""
+        if self._state_deadline is None or now < self._state_deadline:
+            return
+        self._state_deadline = None
+        if self.sm.state != "navigation_planning":
+            self.fire("succeeded")
+        elif self.sm.entered_by == "navigation_schedular":
+            self.fire("navigation_go_to_schedular")
+        else:
+            self.fire("navigation_go_to_emotional" if self.rng.random() < 0.5 else "wandering_emotional")
 
     def _on_state_change(self, event: str, old: str, new: str) -> None:
         now = self.bus.clock.now()
@@ -110,16 +117,6 @@ class ControllerNode(SimNode):
             self._behaviour_navigate(new)
         elif new == "exhausted":
             self._behaviour_navigate(new, "charging_station")
-
-    def _state_timer(self) -> None:
-        state = self.sm.state
-        if state == "navigation_planning":
-            if self.sm.entered_by == "navigation_schedular":
-                self.fire("navigation_go_to_schedular")
-            else:
-                self.fire("navigation_go_to_emotional" if self.rng.random() < 0.5 else "wandering_emotional")
-        else:
-            self.fire("succeeded")
 
     def _behaviour_navigate(self, state: str, location: str | None = None) -> None:
         places = self.nav.world.locations

@@ -32,10 +32,12 @@ class NavigationNode(SimNode):
         self.current_location = ""
         self._map_load_time = messages.stamp()
         mb, nav = ri.action("move_base"), ri.action("navigation")
-        self.move_base = ActionServer(mb.name, mb.type, self._publish_name, self._move_base_goal,
-                                      self._move_base_cancel)
-        self.navigation = ActionServer(nav.name, nav.type, self._publish_name, self._navigation_goal,
-                                       self._navigation_cancel)
+
+        def publish(name: str, msg: dict[str, Any]) -> None:
+            self.bus.publish_name(name, msg)
+
+        self.move_base = ActionServer(mb.name, mb.type, publish, self._move_base_goal, self._move_base_cancel)
+        self.navigation = ActionServer(nav.name, nav.type, publish, self._navigation_goal, self._navigation_cancel)
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
@@ -53,9 +55,6 @@ class NavigationNode(SimNode):
         bus.every(1.0, self._pub_plan)
         bus.every(0.2, self._nav_feedback)
         bus.every(1.0, self._pub_location)
-
-    def _publish_name(self, name: str, msg: dict[str, Any]) -> None:
-        self.bus.publish_name(name, msg)
 
     # --- goals -------------------------------------------------------------------------
 
@@ -186,7 +185,7 @@ class NavigationNode(SimNode):
 
     def _pub_action_status(self) -> None:
         for server in (self.move_base, self.navigation):
-            if self.bus.wants_name(f"{server.name}/status"):
+            if self.bus.broker.wants(f"{server.name}/status"):
                 server.publish_status()
             else:
                 server.status_message()  # still expire old goals
