@@ -366,11 +366,16 @@ CAMERA_RETENTION_S = env_float("CAMERA_RETENTION_S", 2 * 86400.0, minimum=60)
 # An incident keeps every message of the black box's topics and every camera frame in [t - BEFORE, t + AFTER].
 INCIDENT_BEFORE_S = env_float("INCIDENT_BEFORE_S", 60.0, minimum=1)
 INCIDENT_AFTER_S = env_float("INCIDENT_AFTER_S", 30.0, minimum=1)
+# Scaled, the worker checks every LINK_WATCH_EVERY_S that a robot link runs, and sends the link_down
+# alert once none has for LINK_DOWN_ALERT_S (robot.alerts.watchdog).
+LINK_WATCH_EVERY_S = env_float("LINK_WATCH_EVERY_S", 5.0, minimum=0.1)
+LINK_DOWN_ALERT_S = env_float("LINK_DOWN_ALERT_S", 30.0, minimum=0)
 # Each beat job expires just before its next run is due.
 CELERY_BEAT_SCHEDULE = {
     name: {"task": task, "schedule": every_s, "options": {"expires": every_s * 0.9}}
     for name, task, every_s in (("history-sample", "history.sample", HISTORY_SAMPLE_TICK_S),
-                                ("history-prune", "history.prune", HISTORY_PRUNE_EVERY_S))
+                                ("history-prune", "history.prune", HISTORY_PRUNE_EVERY_S),
+                                ("alerts-link-watch", "alerts.check_links", LINK_WATCH_EVERY_S))
 }
 
 # --- API -------------------------------------------------------------------------------

@@ -7,6 +7,7 @@ import io
 import sys
 import threading
 import traceback
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 from channels.layers import channel_layers
@@ -311,3 +312,29 @@ def link_thread(sim, settings):
 @pytest.fixture
 def uses_redis():
     return bool(django_settings.REDIS_URL)
+
+
+class Recorder(BaseHTTPRequestHandler):
+    """A local HTTP server that keeps what it is sent and answers with the next queued status."""
+
+    def do_POST(self):
+        body = self.rfile.read(int(self.headers.get("Content-Length", 0)))
+        self.server.received.append((self.path, {k.lower(): v for k, v in self.headers.items()}, body))
+        status = self.server.statuses.pop(0) if self.server.statuses else 201
+        self.send_response(status)
+        self.send_header("Content-Length", "0")
+        self.end_headers()
+
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture
+def http_server():
+    """A local HTTP server: a chat tool's webhook or a push service stand-in (alerts)."""
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Recorder)
+    server.received, server.statuses = [], []
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    yield server
+    server.shutdown()
+    server.server_close()

@@ -46,7 +46,9 @@ KINDS: dict[str, str] = {
     "diagnostics": "Diagnostics WARN, ERROR or STALE",
     "bumper": "Bumper pressed",
     "estop": "E-STOP engaged",
+    "link_down": "No robot link runs (raised by the worker)",
 }
+LINK_DOWN = "link_down"
 SEVERITY_RANK = {"warning": 1, "error": 2, "critical": 3}
 
 

@@ -8,7 +8,7 @@ from typing import Any
 from django.contrib.auth.models import User
 
 from robot.alerts.book import Record
-from robot.alerts.models import Alert
+from robot.alerts.models import LINK_DOWN, Alert
 
 
 def _when(t: float | None) -> datetime | None:
@@ -19,22 +19,26 @@ def _epoch(d: datetime | None) -> float | None:
     return d.timestamp() if d is not None else None
 
 
+def row(record: Record) -> dict[str, Any]:
+    """The alert's columns as it is now (its acknowledgement only once there is one)."""
+    return {"key": record.key, "kind": record.kind, "severity": record.severity, "text": record.text,
+            "started_at": _when(record.started_at), "updated_at": _when(record.updated_at),
+            "ended_at": _when(record.ended_at), "count": record.count,
+            **({"acked_at": _when(record.acked_at), "acked_by_name": record.acked_by} if record.acked_at else {})}
+
+
 def save(record: Record) -> None:
     """Write the alert as it is now (idempotent: the same record twice is one row)."""
-    Alert.objects.update_or_create(id=record.id, defaults={
-        "key": record.key, "kind": record.kind, "severity": record.severity, "text": record.text,
-        "started_at": _when(record.started_at), "updated_at": _when(record.updated_at),
-        "ended_at": _when(record.ended_at), "count": record.count,
-        **({"acked_at": _when(record.acked_at), "acked_by_name": record.acked_by} if record.acked_at else {}),
-    })
+    Alert.objects.update_or_create(id=record.id, defaults=row(record))
 
 
 def open_records() -> list[Record]:
-    """The alerts not ended, as the raiser keeps them (a new raiser takes them over)."""
+    """The alerts not ended, as the raiser keeps them (a new raiser takes them over); ``link_down`` is
+    the worker's own (robot.alerts.watchdog), which a link only ends by running."""
     return [Record(key=a.key, kind=a.kind, severity=a.severity, text=a.text, started_at=a.started_at.timestamp(),
                    updated_at=a.updated_at.timestamp(), event=a.kind in ("log", "bumper"), count=a.count,
                    acked_by=a.acked_by_name, acked_at=_epoch(a.acked_at), id=a.id.hex)
-            for a in Alert.objects.filter(ended_at=None)]
+            for a in Alert.objects.filter(ended_at=None).exclude(key=LINK_DOWN)]
 
 
 def acknowledge(*, alert_id: str, user: User, at: float) -> Alert | None:

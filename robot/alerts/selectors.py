@@ -5,14 +5,16 @@ from __future__ import annotations
 from typing import Any
 
 from robot.alerts import records
-from robot.alerts.models import Alert
+from robot.alerts.models import LINK_DOWN, Alert
 from robot.live.groups import ALERTS_KEY
 from robot.live.state import get_store
 
 
 async def alerts_on() -> list[dict[str, Any]]:
+    """The raiser's alerts, and the worker's ``link_down`` while no raiser runs."""
     entry = (await get_store().aget_many([ALERTS_KEY])).get(ALERTS_KEY)
-    return list((entry or {}).get("msg", {}).get("alerts", []))
+    unraised = [records.as_dict(a) async for a in Alert.objects.filter(key=LINK_DOWN, ended_at=None)]
+    return [*(entry or {}).get("msg", {}).get("alerts", []), *unraised]
 
 
 def alerts_history(*, limit: int = 100, kind: str = "") -> list[dict[str, Any]]:

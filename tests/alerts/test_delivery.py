@@ -11,9 +11,7 @@ import mailbox
 import os
 import subprocess
 import sys
-import threading
 import time
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import http_ece
 import pytest
@@ -94,31 +92,6 @@ async def test_it_sends_mail_through_a_real_smtp_server(otto_by_email, smtp_serv
     await run_once(a_record(), lambda: len(received()) == 1)
     message = received()[0]
     assert message["To"] == "otto@example.org" and message["Subject"] == "[Cyborg] warning: Battery low: 15 %"
-
-
-class Recorder(BaseHTTPRequestHandler):
-    """A local HTTP server that keeps what it is sent and answers with the next queued status."""
-
-    def do_POST(self):
-        body = self.rfile.read(int(self.headers.get("Content-Length", 0)))
-        self.server.received.append((self.path, {k.lower(): v for k, v in self.headers.items()}, body))
-        status = self.server.statuses.pop(0) if self.server.statuses else 201
-        self.send_response(status)
-        self.send_header("Content-Length", "0")
-        self.end_headers()
-
-    def log_message(self, *args):
-        pass
-
-
-@pytest.fixture
-def http_server():
-    server = ThreadingHTTPServer(("127.0.0.1", 0), Recorder)
-    server.received, server.statuses = [], []
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    yield server
-    server.shutdown()
-    server.server_close()
 
 
 async def test_a_webhook_gets_json_and_a_failing_one_is_tried_again(http_server, monkeypatch):

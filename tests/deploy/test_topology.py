@@ -38,12 +38,15 @@ ODOM = ri.topic("odom").name
 SPEECH = ri.topic("text_to_speech").name
 # A handover takes well under a second (bench/failover.py); the bound leaves room for a loaded machine.
 UNWATCHED_S = 5.0
+LINK_WATCH_EVERY_S = 0.5
 
 
 @pytest.fixture(scope="module")
 def topology():
     # The rolling restart sends a command every 0.1 s: more than the per-user throttle allows.
-    with on_private_services(env={"COMMAND_THROTTLE_RATE": "2000/min"}) as topo:
+    # The link_down alert 3 s after the last link's heartbeat, checked twice a second.
+    with on_private_services(env={"COMMAND_THROTTLE_RATE": "2000/min", "LINK_DOWN_ALERT_S": "3",
+                                  "LINK_WATCH_EVERY_S": str(LINK_WATCH_EVERY_S)}) as topo:
         topo.env["STACK_SIM_ARGS"] = f"--pose-rate {RATE_HZ:g}"
         topo.up()
         topo.record_every(ODOM, ri.topic("odom").type)
@@ -303,6 +306,32 @@ def test_a_forged_forwarded_address_neither_escapes_a_lockout_nor_lands_in_it(to
         assert rows.strip().splitlines()[-1] == "['127.0.0.1']", rows  # the real address, never a forged one
     finally:
         topology.manage("axes_reset")
+
+
+def test_with_no_link_running_the_worker_alerts_once_and_a_link_running_again_ends_it(topology, http_server):
+    topology.manage("shell", "-c", "from robot.alerts.models import Webhook\n"
+                    f"Webhook.objects.create(name='chat', url='http://127.0.0.1:{http_server.server_address[1]}/',"
+                    " kinds=['link_down'])")
+
+    def link_down_on() -> list[dict]:
+        return [a for a in topology.fetch("/api/alerts/", user="vera")[1]["on"] if a["kind"] == "link_down"]
+
+    try:
+        for link in ("link-a", "link-b"):
+            topology.kill(link)
+        topology.wait(lambda: http_server.received, timeout=30, what="the link_down alert at the webhook")
+        alert = json.loads(http_server.received[0][2])["alert"]
+        assert (alert["kind"], alert["severity"]) == ("link_down", "critical")
+        assert [a["id"] for a in link_down_on()] == [alert["id"]]
+        time.sleep(4 * LINK_WATCH_EVERY_S)  # more checks of the same outage send nothing more
+        assert len(http_server.received) == 1
+    finally:
+        topology.script("restart link-a link-b")
+    topology.wait(lambda: topology.health().get("connected") is True, timeout=60, what="the robot online again")
+    topology.wait(lambda: not link_down_on(), timeout=15, what="link_down ended")
+    history = topology.fetch("/api/alerts/?kind=link_down", user="vera")[1]["history"]
+    assert next(a for a in history if a["id"] == alert["id"])["ended_at"] is not None
+    assert len(http_server.received) == 1
 
 
 def test_a_process_that_dies_is_started_again_like_the_units_do(topology):
