@@ -34,14 +34,6 @@ class Audio:
         self.speaking: str | None = None
         self.playing: str | None = None
         self.done_count = 0
-        self._tasks: list[asyncio.Task[None]] = []
-
-    def start(self) -> None:
-        self._tasks.append(asyncio.get_running_loop().create_task(self._speak_loop()))
-
-    def stop(self) -> None:
-        for t in self._tasks:
-            t.cancel()
 
     def duration(self, text: str) -> float:
         return max(self.min_s, self.s_per_char * len(text))
@@ -55,16 +47,15 @@ class Audio:
 
     def play(self, clip: str) -> None:
         self.playing = clip
-        task = asyncio.get_running_loop().create_task(self._play(clip))
-        self._tasks = [t for t in self._tasks if not t.done()] + [task]
+        asyncio.get_running_loop().call_later(self.clip_s, self._played, clip)
 
-    async def _play(self, clip: str) -> None:
-        await asyncio.sleep(self.clip_s)
+    def _played(self, clip: str) -> None:
         if self.playing == clip:
             self.playing = None
         self.played(clip)
 
-    async def _speak_loop(self) -> None:
+    async def run(self) -> None:
+        """Speak what is queued, one utterance after another (the node runs it on the bus)."""
         while True:
             text = await self.queue.get()
             self.speaking = text
@@ -120,7 +111,6 @@ class Microphone:
         self.encoder = mp3_encoder(rate) if coding == "mp3" else None
         self.samples = 0  # published so far (the tone's phase)
         self.published = 0
-        self._task: asyncio.Task[None] | None = None
 
     def info(self) -> dict[str, object]:
         bitrate = MP3_KBPS if self.coding == "mp3" else self.rate * 16
@@ -131,15 +121,8 @@ class Microphone:
         """One chunk as it goes on the topic (mp3: whatever the encoder has finished, maybe nothing)."""
         return bytes(self.encoder.encode(pcm)) if self.encoder is not None else pcm
 
-    def start(self) -> None:
-        if self.freq_hz > 0:
-            self._task = asyncio.get_running_loop().create_task(self._run())
-
-    def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-
-    async def _run(self) -> None:
+    async def run(self) -> None:
+        """Publish chunks until cancelled (the node runs it on the bus)."""
         loop = asyncio.get_running_loop()
         period = self.chunk / self.rate
         due = loop.time()

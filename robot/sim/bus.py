@@ -15,7 +15,7 @@ import math
 import time
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 from robot import interface as ri
 
@@ -29,35 +29,18 @@ TickFn = Callable[[float, float], None]  # (monotonic now, dt seconds)
 _LOG_LEVELS = {1: logging.DEBUG, 2: logging.INFO, 4: logging.WARNING, 8: logging.ERROR, 16: logging.CRITICAL}
 
 
-class Node(Protocol):
-    """One simulated ROS node (or a few that always go together).
+class SimNode:
+    """One simulated ROS node (or a few that always go together): every node subclasses it.
 
     ``names``: the ROS node names it plays (listed by /rosapi/nodes). ``publishes`` and
     ``answers``: the interface keys of the topics it publishes and the services it answers
-    (tests hold them against ``robot/interface.py``). ``start`` wires the node to the bus —
-    handlers, services, periodic publishers, tasks — and may publish its first (latched)
-    messages; it runs once, on the simulator's loop, before any client can connect.
+    (tests hold them against ``robot/interface.py``). None of them unless a node gives them.
+    ``start`` wires the node to the bus — handlers, services, periodic publishers, tasks — and
+    may publish its first (latched) messages; it runs once, on the simulator's loop, before any
+    client can connect. A node's own ``start`` calls this one first, which keeps the bus.
     ``stop`` ends whatever ``start`` began outside the bus (threads); tasks started with
     ``bus.spawn`` are cancelled by the simulator.
     """
-
-    @property
-    def names(self) -> tuple[str, ...]: ...
-
-    @property
-    def publishes(self) -> tuple[str, ...]: ...
-
-    @property
-    def answers(self) -> tuple[str, ...]: ...
-
-    def start(self, bus: Bus) -> None: ...
-
-    def stop(self) -> None: ...
-
-
-class SimNode:
-    """What most nodes leave as it is: no names of their own, nothing published or answered,
-    nothing to stop. ``start`` keeps the bus; a node's own ``start`` calls it first."""
 
     names: tuple[str, ...] = ()
     publishes: tuple[str, ...] = ()

@@ -39,15 +39,6 @@ def to_grid_values(distance: np.ndarray, unknown: np.ndarray) -> np.ndarray:
     return values.astype(np.int8)
 
 
-def _blocks(world: WorldMap, f: int) -> tuple[np.ndarray, np.ndarray]:
-    """(obstacle, unknown) per f x f block of the world: a block is an obstacle if any cell is."""
-    h, w = -(-world.height // f), -(-world.width // f)
-    grid = np.full((h * f, w * f), UNKNOWN, dtype=np.int8)
-    grid[:world.height, :world.width] = world.grid
-    blocks = grid.reshape(h, f, w, f)
-    return np.asarray((blocks >= OCCUPIED).any(axis=(1, 3))), np.asarray((blocks == UNKNOWN).all(axis=(1, 3)))
-
-
 @dataclass(frozen=True)
 class Grid:
     data: np.ndarray  # int8, row 0 at the origin
@@ -58,7 +49,8 @@ class Grid:
 
 def global_costmap(world: WorldMap) -> Grid:
     f = max(1, math.ceil(math.sqrt(world.width * world.height / MAX_GLOBAL_CELLS)))
-    obstacle, unknown = _blocks(world, f)
+    blocks = world.blocks(f, UNKNOWN)  # a block is an obstacle if any cell is, unknown if all are
+    obstacle, unknown = (blocks >= OCCUPIED).any(axis=(1, 3)), (blocks == UNKNOWN).all(axis=(1, 3))
     res = world.resolution * f
     distance = distance_transform_edt(~obstacle) * res
     return Grid(to_grid_values(distance, unknown), res, world.origin_x, world.origin_y)

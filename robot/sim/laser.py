@@ -18,7 +18,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from . import messages
-from .world import OCCUPIED, WorldMap
+from .world import FREE, OCCUPIED, WorldMap
 
 MAX_STEPS = 1000  # enough for a beam grazing a wall all the way to range_max
 MOUNT = (0.2, 0.0, 0.0)  # x, y, yaw of the laser on base_link (the /tf_static the base publishes)
@@ -45,10 +45,7 @@ class Laser:
         # block's half diagonal (from anywhere in one block to anywhere in the other): never more
         # than the way is clear. Blocks of f x f cells keep a large map quick.
         f = self._block = max(1, math.ceil(math.sqrt(self._occupied.size / 250_000)))
-        h, w = -(-self._occupied.shape[0] // f), -(-self._occupied.shape[1] // f)
-        padded = np.zeros((h * f, w * f), dtype=bool)
-        padded[:self._occupied.shape[0], :self._occupied.shape[1]] = self._occupied
-        blocks = padded.reshape(h, f, w, f).any(axis=(1, 3))
+        blocks = (self.world.blocks(f, FREE) >= OCCUPIED).any(axis=(1, 3))
         size = f * self.world.resolution
         self._clearance = (distance_transform_edt(~blocks) * size - size * 1.5).astype(np.float32)
 

@@ -15,6 +15,8 @@ import math
 import time
 from typing import Any
 
+import numpy as np
+
 # Message definitions in the .msg syntax ("type name" pairs separated by ';').
 _DEFS: dict[str, str] = {
     "std_msgs/Header": "uint32 seq; time stamp; string frame_id",
@@ -154,11 +156,10 @@ for _srv, (_req, _resp) in SERVICE_DEFS.items():
     _DEFS[f"{_srv}Response"] = _resp
 
 INT_RANGES: dict[str, tuple[int, int]] = {
-    "int8": (-(2**7), 2**7 - 1), "uint8": (0, 2**8 - 1), "byte": (-(2**7), 2**7 - 1), "char": (0, 255),
-    "int16": (-(2**15), 2**15 - 1), "uint16": (0, 2**16 - 1),
-    "int32": (-(2**31), 2**31 - 1), "uint32": (0, 2**32 - 1),
-    "int64": (-(2**63), 2**63 - 1), "uint64": (0, 2**64 - 1),
+    t: (int(np.iinfo(t).min), int(np.iinfo(t).max))
+    for t in ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64")
 }
+INT_RANGES |= {"byte": INT_RANGES["int8"], "char": INT_RANGES["uint8"]}
 FLOATS = frozenset({"float32", "float64"})
 _EXACT: dict[str, type] = {"bool": bool, "string": str}  # no other Python type passes for these
 _ZERO: dict[str, Any] = {**dict.fromkeys(INT_RANGES, 0), **dict.fromkeys(FLOATS, 0.0), "bool": False, "string": ""}

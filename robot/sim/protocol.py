@@ -50,7 +50,6 @@ class Subscription:
     """One client's server-side subscription to a topic, shared by its subscribe ids."""
 
     client: Client
-    topic: str
     params: dict[Any, tuple[int, int]] = field(default_factory=dict)  # sid -> (throttle ms, queue length)
     throttle_s: float = 0.0
     last_sent: float = 0.0
@@ -331,7 +330,7 @@ class Client:
         subs = self.broker.subs[topic]
         sub = subs.get(self.id)
         if sub is None:
-            sub = subs[self.id] = Subscription(self, topic)
+            sub = subs[self.id] = Subscription(self)
         sub.params[mid] = (max(0, frame.get("throttle_rate", 0)), max(0, frame.get("queue_length", 0)))
         sub.update()
         latched = self.broker.latched_frame(topic)

@@ -21,7 +21,7 @@ from robot import interface as ri
 
 from . import messages
 from .audio import Microphone, Speaker
-from .bus import Bus, Clock, Node
+from .bus import Bus, Clock, SimNode
 from .camera import VideoServer
 from .emotions import EmotionSystem
 from .nodes.audiovisual import AudioVisualNode
@@ -42,7 +42,7 @@ from .statemachine import StateMachine
 from .world import Base, build
 
 log = logging.getLogger("robot.sim")
-N = TypeVar("N", bound=Node)
+N = TypeVar("N", bound=SimNode)
 
 
 class SimRobot:
@@ -85,7 +85,7 @@ class SimRobot:
         for t in ri.topics():
             self.bus.declare(t.name, t.type)
 
-        self.nodes: list[Node] = []
+        self.nodes: list[SimNode] = []
         self._started = False
         self.bridge = BridgeNode(self.rng)
         # Added in tick order: physics, then navigation, emotions, state timers.

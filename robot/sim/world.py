@@ -43,6 +43,13 @@ class WorldMap:
     def height(self) -> int:
         return int(self.grid.shape[0])
 
+    def blocks(self, f: int, fill: int) -> np.ndarray:
+        """The grid as f x f blocks, shape (rows, f, cols, f); cells past its edges are ``fill``."""
+        h, w = -(-self.height // f), -(-self.width // f)
+        grid = np.full((h * f, w * f), fill, dtype=np.int8)
+        grid[:self.height, :self.width] = self.grid
+        return grid.reshape(h, f, w, f)
+
     def cell(self, x: float, y: float) -> tuple[int, int]:
         return int((y - self.origin_y) / self.resolution), int((x - self.origin_x) / self.resolution)
 

@@ -28,13 +28,10 @@ class AudioVisualNode(SimNode):
         bus.on("domecontrol", self._domecontrol)
         bus.on("speaker", self.speaker.on_data)
         bus.on("speaker_info", self.speaker.on_info)
-        self.audio.start()
-        self.mic.start()
+        bus.spawn(self.audio.run())
+        if self.mic.freq_hz > 0:
+            bus.spawn(self.mic.run())
         bus.publish("audio_info", self.mic.info())
-
-    def stop(self) -> None:
-        self.audio.stop()
-        self.mic.stop()
 
     def _playback(self, m: dict[str, Any]) -> None:
         self.bus.rosout(2, "/cyborg_audio", f"Playing sound clip {m['data']}")

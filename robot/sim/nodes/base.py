@@ -10,7 +10,7 @@ from typing import Any
 
 from .. import messages, world
 from ..bus import Bus, SimNode
-from .shapes import body_pose, transform
+from .shapes import body_pose, pose, transform
 
 NODE = "/RosAria"
 SONAR_X = 0.1  # the sonar ring's offset ahead of base_link
@@ -109,8 +109,7 @@ class BaseNode(SimNode):
             cov = [0.0] * 36
             bus.publish("odom", {
                 "header": messages.header("odom", time.time(), self.odom_seq), "child_frame_id": "base_link",
-                "pose": {"pose": {"position": {"x": b.odom_x, "y": b.odom_y, "z": 0.0},
-                                  "orientation": world.yaw_to_quaternion(b.odom_yaw)}, "covariance": cov},
+                "pose": {"pose": pose(b.odom_x, b.odom_y, b.odom_yaw), "covariance": cov},
                 "twist": {"twist": {"linear": {"x": b.v, "y": 0.0, "z": 0.0},
                                     "angular": {"x": 0.0, "y": 0.0, "z": b.w}}, "covariance": cov},
             })

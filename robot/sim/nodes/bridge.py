@@ -35,7 +35,8 @@ class BridgeNode(SimNode):
         super().start(bus)
         broker = bus.broker
         bus.declare("/connected_clients", "rosbridge_msgs/ConnectedClients")
-        bus.answer("rosapi_topics", lambda r: self._topics())
+        bus.answer("rosapi_topics", lambda r: {"topics": sorted(broker.types),
+                                              "types": [broker.types[n] for n in sorted(broker.types)]})
         bus.answer("rosapi_topic_type", lambda r: {"type": broker.types.get(r["topic"], "")})
         bus.answer("rosapi_services", lambda r: {"services": sorted(broker.services)})
         bus.answer("rosapi_nodes", lambda r: {"nodes": list(self.graph_nodes)})
@@ -44,7 +45,8 @@ class BridgeNode(SimNode):
             "topics": sorted(t for t, ty in broker.types.items() if ty == r["type"])})
         bus.answer_name("/rosapi/service_type", "rosapi/ServiceType", lambda r: {
             "type": broker.services.get(r["service"], ("",))[0]})
-        bus.answer_name("/rosapi/get_param", "rosapi/GetParam", self._get_param)
+        bus.answer_name("/rosapi/get_param", "rosapi/GetParam", lambda r: {
+            "value": json.dumps(self.params[r["name"]]) if r["name"] in self.params else r["default"]})
         bus.answer_name("/rosapi/has_param", "rosapi/HasParam", lambda r: {"exists": r["name"] in self.params})
         bus.answer_name("/rosapi/get_param_names", "rosapi/GetParamNames", lambda r: {"names": sorted(self.params)})
         bus.answer_name("/rosapi/message_details", "rosapi/MessageDetails", self._message_details)
@@ -57,16 +59,6 @@ class BridgeNode(SimNode):
         self.bus.publish_name("/connected_clients", {"clients": [
             {"ip_address": c.address, "connection_time": messages.stamp(c.connected_at)}
             for c in clients.values()]}, latch=True)
-
-    def _topics(self) -> dict[str, Any]:
-        types = self.bus.broker.types
-        names = sorted(types)
-        return {"topics": names, "types": [types[n] for n in names]}
-
-    def _get_param(self, r: dict[str, Any]) -> dict[str, Any]:
-        if r["name"] in self.params:
-            return {"value": json.dumps(self.params[r["name"]])}
-        return {"value": r["default"]}
 
     def _message_details(self, r: dict[str, Any]) -> dict[str, Any]:
         if not messages.known(r["type"]):

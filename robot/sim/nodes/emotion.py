@@ -25,7 +25,8 @@ class EmotionNode(SimNode):
         super().start(bus)
         bus.on("emotional_controller", self._emotional_controller)
         bus.on("set_emotional_state", self._set_emotion)
-        bus.on("emotional_feedback", self._emotional_feedback)
+        bus.on("emotional_feedback", lambda m: self.emotions.feedback(m["delta_pleasure"], m["delta_arousal"],
+                                                                     m["delta_dominance"]))
         bus.answer("get_emotional_state", self._get_emotional_state)
         bus.each_tick(lambda now, dt: self.emotions.drift(dt))
         bus.every(1.0, self._publish)
@@ -42,9 +43,6 @@ class EmotionNode(SimNode):
     def _set_emotion(self, m: dict[str, Any]) -> None:
         if not self.emotions.set(m["data"]):
             self.bus.rosout(4, NODE, f"Unknown emotional state '{m['data']}': ignored")
-
-    def _emotional_feedback(self, m: dict[str, Any]) -> None:
-        self.emotions.feedback(m["delta_pleasure"], m["delta_arousal"], m["delta_dominance"])
 
     def _get_emotional_state(self, r: dict[str, Any]) -> dict[str, Any]:
         p, a, d = self.emotions.pad

@@ -14,7 +14,7 @@ from typing import Any
 
 from robot import interface as ri
 
-from ..bus import Bus, Node, SimNode
+from ..bus import Bus, SimNode
 
 BRIDGE = "/rosbridge_websocket"
 
@@ -23,7 +23,7 @@ class GraphNode(SimNode):
     names: tuple[str, ...] = ()  # part of /rosapi (the bridge node names it)
     answers = ("rosapi_publishers", "rosapi_subscribers", "rosapi_node_details")
 
-    def __init__(self, nodes: Callable[[], Sequence[Node]]) -> None:
+    def __init__(self, nodes: Callable[[], Sequence[SimNode]]) -> None:
         self.nodes = nodes
 
     def start(self, bus: Bus) -> None:
