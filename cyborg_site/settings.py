@@ -262,6 +262,8 @@ UPLINK_MAX_MESSAGES_PER_S = env_int("UPLINK_MAX_MESSAGES_PER_S", 5000, minimum=1
 UPLINK_AUTH_TIMEOUT_S = env_float("UPLINK_AUTH_TIMEOUT_S", 5.0, minimum=0.1)
 UPLINK_FAILURE_LIMIT = env_int("UPLINK_FAILURE_LIMIT", 10, minimum=1)  # refused attempts per address and minute
 ROSBRIDGE_URL = env_str("ROSBRIDGE_URL", f"ws://127.0.0.1:{UPLINK_ROSBRIDGE_PORT}" if UPLINK else "ws://127.0.0.1:9090")
+# A wss:// robot's certificate is checked against these roots (PEM), or the system's when unset.
+ROSBRIDGE_CA_FILE = env_str("ROSBRIDGE_CA_FILE", "")
 VIDEO_URL = env_str("VIDEO_URL", f"http://127.0.0.1:{UPLINK_VIDEO_PORT}" if UPLINK else "http://127.0.0.1:8080")
 VIDEO_TOPIC = env_str("VIDEO_TOPIC", "/videostream")
 # Camera streams one web process serves at once: per person, and in all.

@@ -5,8 +5,9 @@ which inside Daphne is the web server's event loop. A 4000 x 4000 map would stal
 page and websocket for most of a second. ``LinkRos`` is ``roslibpy.Ros`` with a protocol
 that sends frames of ``LARGE_FRAME_BYTES`` and more to one decoding thread (so they stay
 in order) and hands the decoded message back to roslibpy's own dispatch on the reactor.
-It also turns Nagle off on the rosbridge socket (see ``tcpNoDelay``), and replaces lone UTF-16
-surrogates in the robot's text (they break every UTF-8 encoder downstream) with U+FFFD.
+It also turns Nagle off on the rosbridge socket (see ``tcpNoDelay``), replaces lone UTF-16
+surrogates in the robot's text (they break every UTF-8 encoder downstream) with U+FFFD, and
+checks a wss:// robot's certificate, which autobahn's default TLS context never does.
 """
 
 from __future__ import annotations
@@ -14,13 +15,18 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import re
 import time
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 from typing import Any
 
 import roslibpy
+from autobahn.twisted.websocket import connectWS
+from django.conf import settings
 from roslibpy.comm.comm_autobahn import AutobahnRosBridgeProtocol
 from roslibpy.core import Message
+from twisted.internet import ssl
 from twisted.python import threadable
 
 from cyborg_site.text import scrub_json
@@ -100,6 +106,17 @@ def _keep_one_twisted_log_observer(manager: Any) -> None:
         observer.stop()
 
 
+def verified_tls(host: str) -> Any:
+    """TLS options that check the robot's certificate and name against ``ROSBRIDGE_CA_FILE`` (PEM, one
+    or more certificates) or, unset, the system's roots."""
+    if not settings.ROSBRIDGE_CA_FILE:
+        return ssl.optionsForClientTLS(host, trustRoot=ssl.platformTrust())
+    pem = Path(settings.ROSBRIDGE_CA_FILE).read_text()
+    certificates = re.findall(r"-----BEGIN CERTIFICATE-----.+?-----END CERTIFICATE-----", pem, re.S)
+    return ssl.optionsForClientTLS(host, trustRoot=ssl.trustRootFromCertificates(
+        [ssl.Certificate.loadPEM(c) for c in certificates]))
+
+
 class LinkRos(roslibpy.Ros):
     """``roslibpy.Ros`` whose connections use ``LinkProtocol``; ``array_topics`` get numpy arrays."""
 
@@ -112,6 +129,9 @@ class LinkRos(roslibpy.Ros):
         # Ros.__init__ connects at once: set the protocol before the first connection is built.
         self.factory.protocol = LinkProtocol
         self.factory.array_topics = self._array_topics
+        if self.factory.isSecure:
+            factory, tls = self.factory, verified_tls(self.factory.host)
+            factory._connect = lambda: setattr(factory, "connector", connectWS(factory, tls))
         super().connect()
 
 
