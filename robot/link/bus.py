@@ -12,7 +12,7 @@ import time
 import uuid
 import weakref
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from contextvars import ContextVar
 from typing import Any, cast
 
@@ -78,10 +78,7 @@ class Throttled(RobotError):
     code = "throttled"
 
 
-_ERRORS: dict[str, type[RobotError]] = {
-    "offline": RobotOffline, "timeout": RobotTimeout, "estop": EstopEngaged, "not_found": RobotNotFound,
-    "throttled": Throttled, "not_responding": RobotNotResponding,
-}
+_ERRORS: dict[str, type[RobotError]] = {error.code: error for error in RobotError.__subclasses__()}
 
 
 def _not_responding(request: LinkRequest, *, responding: bool) -> RobotNotResponding | None:
@@ -94,48 +91,40 @@ def _not_responding(request: LinkRequest, *, responding: bool) -> RobotNotRespon
                               f"for {getattr(settings, 'ROBOT_HANG_S', 2.0):g} s; commands wait until it answers")
 
 
-_stopping: ContextVar[bool] = ContextVar("stopping", default=False)
+# The marks of the requests made in this context (``stopping``, ``emergency``).
+_marks: ContextVar[tuple[str, ...]] = ContextVar("link_request_marks", default=())
 
 
 @contextmanager
-def stopping() -> Iterator[None]:
+def _marked(*marks: str) -> Iterator[None]:
+    token = _marks.set((*_marks.get(), *marks))
+    try:
+        yield
+    finally:
+        _marks.reset(token)
+
+
+def stopping() -> AbstractContextManager[None]:
     """Requests made inside (and in tasks started inside) are meant to stop the robot (the E-STOP's
     steps, a command that does not move it): the link lets those that stop it through its latch
     (``interface.passes_latch``), and holds back the same requests from anyone else (a mode change
     still walking when the stop came)."""
-    token = _stopping.set(True)
-    try:
-        yield
-    finally:
-        _stopping.reset(token)
+    return _marked("stopping")
 
 
-_emergency: ContextVar[bool] = ContextVar("emergency", default=False)
-
-
-@contextmanager
-def emergency() -> Iterator[None]:
+def emergency() -> AbstractContextManager[None]:
     """The E-STOP's own requests: they pass the latch (``stopping``), reach a link that can no
     longer prove its lease because Redis is out of reach, and go by the direct path first."""
-    token = _emergency.set(True)
-    try:
-        with stopping():
-            yield
-    finally:
-        _emergency.reset(token)
+    return _marked("stopping", "emergency")
 
 
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:
-    request = cast(LinkRequest, {
+    return cast(LinkRequest, {
         "type": "link.request", "op": op, "request_id": uuid.uuid4().hex,
         # The link may need most of the timeout for a service call; leave room for the reply.
         "deadline": time.time() + timeout, "timeout": max(0.1, timeout - 0.2), **fields,
+        **dict.fromkeys(_marks.get(), True),
     })
-    if _stopping.get():
-        request["stopping"] = True
-    if _emergency.get():
-        request["emergency"] = True
-    return request
 
 
 async def aping_over_queue(timeout: float) -> bool:

@@ -36,11 +36,8 @@ class Unreachable(Exception):
 
 
 def addresses() -> list[tuple[str, int]]:
-    found = []
-    for item in settings.ROBOT_LINK_DIRECT_ADDRESSES:
-        host, _, port = item.rpartition(":")
-        found.append((host or "127.0.0.1", int(port)))
-    return found
+    parts = [item.rpartition(":") for item in settings.ROBOT_LINK_DIRECT_ADDRESSES]
+    return [(host or "127.0.0.1", int(port)) for host, _, port in parts]
 
 
 def enabled() -> bool:

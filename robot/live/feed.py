@@ -46,29 +46,30 @@ def channel() -> str:
     return redis_key("live")
 
 
-def _redis() -> Any:
-    return redis_clients.aclient()
-
-
 async def announce(update: dict[str, Any]) -> None:
     """Send one update to every socket watching its key, in every web process."""
-    key, text, t = update["key"], update_fragment(update), float(update["t"])
-    every = keeps_every_message(key)
-    if settings.REDIS_URL:
-        await _redis().publish(channel(), f"{key}\n{t!r}\n{int(every)}\n{text}")
-        return
-    for hub in hubs():
-        hub.publish(key, text, t, every=every)
+    key = update["key"]
+    await _send(key, float(update["t"]), keeps_every_message(key), update_fragment(update))
 
 
 async def announce_status(status: dict[str, Any]) -> None:
     """The link's status to every live socket, in every web process."""
-    text = status_text(status)
+    await _send(STATUS_KEY, 0, False, status_text(status))
+
+
+async def _send(key: str, t: float, every: bool, text: str) -> None:
     if settings.REDIS_URL:
-        await _redis().publish(channel(), f"{STATUS_KEY}\n0\n0\n{text}")
+        await redis_clients.aclient().publish(channel(), f"{key}\n{t!r}\n{int(every)}\n{text}")
         return
     for hub in hubs():
+        _offer(hub, key, text, t, every)
+
+
+def _offer(hub: Hub, key: str, text: str, t: float, every: bool) -> None:
+    if key == STATUS_KEY:
         hub.publish_status(text)
+    else:
+        hub.publish(key, text, t, every=every)
 
 
 async def alocal_hub() -> Hub:
@@ -95,10 +96,7 @@ def deliver(hub: Hub, data: bytes | str) -> tuple[str, float]:
     """One message from the Redis channel into the hub; its key and time."""
     raw = data.decode() if isinstance(data, bytes) else data
     key, t, every, text = raw.split("\n", 3)
-    if key == STATUS_KEY:
-        hub.publish_status(text)
-    else:
-        hub.publish(key, text, float(t), every=every == "1")
+    _offer(hub, key, text, float(t), every == "1")
     return key, float(t)
 
 

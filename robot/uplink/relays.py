@@ -107,9 +107,7 @@ class Relays:
             raise web.HTTPBadGateway(text=f"the robot's video server: {exc}") from None
         response = web.StreamResponse(status=int(head.get("status") or 502))
         headers = head.get("headers") or {}
-        response.content_type = str(headers.get("Content-Type") or "application/octet-stream").split(";")[0]
-        if ";" in str(headers.get("Content-Type") or ""):
-            response.headers["Content-Type"] = str(headers["Content-Type"])
+        response.headers["Content-Type"] = str(headers.get("Content-Type") or "application/octet-stream")
         if str(headers.get("Content-Length") or "").isdigit():
             response.content_length = int(headers["Content-Length"])
         try:
