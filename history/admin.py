@@ -99,14 +99,14 @@ class TopicPolicyAdmin(admin.ModelAdmin):
 
     def discover(self, request: HttpRequest) -> HttpResponse:
         """Add (mode off) every topic the robot reports through /rosapi/topics."""
-        if request.method != "POST" or not self.has_add_permission(request):
-            return redirect("admin:history_topicpolicy_changelist")
-        try:
-            discovered, added = policies_discover(user=request.user, source="page")
-        except RobotError as exc:
-            self.message_user(request, f"Could not ask the robot for its topics: {exc.message}", messages.ERROR)
-            return redirect("admin:history_topicpolicy_changelist")
-        self.message_user(request, f"The robot reports {discovered} topics; added {len(added)} new (recording off).")
+        if request.method == "POST" and self.has_add_permission(request):
+            try:
+                discovered, added = policies_discover(user=request.user, source="page")
+            except RobotError as exc:
+                self.message_user(request, f"Could not ask the robot for its topics: {exc.message}", messages.ERROR)
+            else:
+                self.message_user(request, f"The robot reports {discovered} topics; added {len(added)} new "
+                                           "(recording off).")
         return redirect("admin:history_topicpolicy_changelist")
 
 

@@ -47,8 +47,7 @@ def _topic_query(request: Request, shape: type[s.RangeIn]) -> dict[str, Any]:
 
 
 def _policies() -> dict[str, Any]:
-    settings_row = RecordingSettings.load()
-    default_s = settings_row.effective_interval_s
+    default_s = RecordingSettings.load().effective_interval_s
     return {
         "default_interval_s": default_s,
         "topics": [

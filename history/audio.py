@@ -128,17 +128,13 @@ def export_wav(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
     total = sum(len(data) for data in _chunks(topic, start, end, frame))
     yield wav_header(fmt, total)
     # Rows may arrive (or expire) between the two reads: send exactly what the header declares.
-    remaining = total
-    pending: list[bytes] = []
-    size = 0
+    remaining, pending = total, bytearray()
     for data in _chunks(topic, start, end, frame):
-        data = data[:remaining]
-        remaining -= len(data)
-        pending.append(data)
-        size += len(data)
-        if size >= 256 * 1024:
-            yield b"".join(pending)
-            pending, size = [], 0
+        pending += data[:remaining]
+        remaining = max(0, remaining - len(data))
+        if len(pending) >= 256 * 1024:
+            yield bytes(pending)
+            pending.clear()
         if not remaining:
             break
-    yield b"".join(pending) + bytes(remaining)
+    yield bytes(pending) + bytes(remaining)

@@ -53,10 +53,6 @@ class BlackBox(Capture[Pending]):
         self.fired: list[tuple[str, float, str, str]] = []  # (kind, t, summary, by)
         self._latch_at: float | None = None
 
-    def _upgraded(self) -> frozenset[str]:
-        """The topics recorded every N seconds: those an incident keeps every message of."""
-        return recorder.current.periodic if recorder.current is not None else frozenset()
-
     # --- on the event-loop thread: never blocks --------------------------------------
 
     def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
@@ -72,7 +68,8 @@ class BlackBox(Capture[Pending]):
     def _keep(self, entry: list[Any]) -> None:
         entry[2] = True
         t, (name, msg_type, msg), _ = entry
-        if name in self._upgraded():
+        # The topics recorded every N seconds are those an incident keeps every message of.
+        if recorder.current is not None and name in recorder.current.periodic:
             self._pending.append((name, msg_type, msg, t))
 
     def adopt(self, incident: Incident) -> None:
@@ -114,10 +111,6 @@ class BlackBox(Capture[Pending]):
     def _batch(self, pending: list[Pending]) -> list[Row]:
         return encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)[0]
 
-    def subscribe(self, link: Any) -> None:
-        for name, msg_type in self.topics.items():
-            link.subscribe(name, msg_type, holder=LINK_HOLDER)  # again each second: a no-op once held
-
     async def run(self, link: Any) -> None:
         if self.offer not in link.listeners:
             link.listeners.append(self.offer)
@@ -130,7 +123,8 @@ class BlackBox(Capture[Pending]):
                     await self.open_fired()
                     if time.monotonic() >= next_adopt:
                         next_adopt = time.monotonic() + ADOPT_EVERY_S
-                        self.subscribe(link)
+                        for name, msg_type in self.topics.items():
+                            link.subscribe(name, msg_type, holder=LINK_HOLDER)  # again each second: a no-op once held
                         await self.adopt_open()
                     await self.flush()
                     failures.ok()

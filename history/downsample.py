@@ -12,7 +12,6 @@ leave out, come from the stored JSON; there a bucket that can no longer change i
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 import time
@@ -51,10 +50,7 @@ def parse_field(path: str) -> list[str]:
 
 
 def bucket_width_ms(span_s: float, max_points: int) -> int:
-    for width in WIDTHS_MS:
-        if span_s * 1000 / width <= max_points:
-            return width
-    return WIDTHS_MS[-1]
+    return next((width for width in WIDTHS_MS if span_s * 1000 / width <= max_points), WIDTHS_MS[-1])
 
 
 @dataclass
@@ -62,11 +58,11 @@ class Series:
     topic: str
     field: str
     bucket_s: float
-    t: list[float] = dataclasses.field(default_factory=list)  # epoch seconds of each bucket's first sample
-    min: list[float] = dataclasses.field(default_factory=list)
-    max: list[float] = dataclasses.field(default_factory=list)
-    mean: list[float] = dataclasses.field(default_factory=list)
-    count: list[int] = dataclasses.field(default_factory=list)
+    t: list[float]  # epoch seconds of each bucket's first sample
+    min: list[float]
+    max: list[float]
+    mean: list[float]
+    count: list[int]
 
 
 Agg = tuple[float | None, float | None, float | None, float | None, int]  # t_first, min, max, sum, n
@@ -168,16 +164,7 @@ def series(*, topic: str, field: str, start: datetime, end: datetime, max_points
     buckets = _from_rollups(topic, field, level, width, b0, b1) if level else None
     if buckets is None:
         buckets = _from_samples(topic, field, width, b0, b1, now)
-    out = Series(topic=topic, field=field, bucket_s=width / 1000)
-    for i in range(b0, b1 + 1):
-        agg = buckets.get(i)
-        if agg is None or not agg[4]:
-            continue
-        t, vmin, vmax, vsum, n = agg
-        assert t is not None and vmin is not None and vmax is not None and vsum is not None  # set when n > 0
-        out.t.append(t)
-        out.min.append(vmin)
-        out.max.append(vmax)
-        out.mean.append(vsum / n)
-        out.count.append(n)
-    return out
+    kept = [buckets[i] for i in sorted(buckets) if b0 <= i <= b1 and buckets[i][4]]  # n > 0: all of it is set
+    t, vmin, vmax, vsum, n = map(list, zip(*kept, strict=True)) if kept else ([], [], [], [], [])
+    return Series(topic=topic, field=field, bucket_s=width / 1000, t=t, min=vmin, max=vmax,
+                  mean=[total / count for total, count in zip(vsum, n, strict=True)], count=n)

@@ -46,7 +46,7 @@ class DurationInSeconds(forms.Field):
         try:
             seconds = parse_duration(str(value))
         except ValueError:
-            raise forms.ValidationError(self.error_messages["invalid"], code="invalid") from None
+            seconds = 0.0  # refused below, as a duration of nothing is
         if seconds <= 0:
             raise forms.ValidationError(self.error_messages["invalid"], code="invalid")
         return seconds

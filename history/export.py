@@ -10,9 +10,11 @@ import csv
 import json
 from collections.abc import Iterator
 from datetime import datetime
+from itertools import batched
 from typing import IO, Any, cast
 
 from history.audio import export_wav
+from history.mcapexport import JsonMcap
 from history.models import Sample
 
 FORMATS: dict[str, tuple[str, str]] = {
@@ -39,26 +41,19 @@ def _dumps(value: Any) -> str:
 
 def scalar_columns(msg: Any, prefix: str = "") -> list[str]:
     """Dotted paths of the scalar leaves outside arrays (the CSV's columns)."""
-    if not isinstance(msg, dict):
-        return [prefix] if prefix else []
     paths: list[str] = []
-    for key, value in msg.items():
-        path = f"{prefix}.{key}" if prefix else key
+    for key, value in msg.items() if isinstance(msg, dict) else ():
         if isinstance(value, dict):
-            paths.extend(scalar_columns(value, path))
+            paths.extend(scalar_columns(value, f"{prefix}{key}."))
         elif not isinstance(value, list):
-            paths.append(path)
+            paths.append(f"{prefix}{key}")
     return paths
 
 
 def pick(msg: Any, path: str) -> Any:
+    """The value at a column's path (None where this message lacks it)."""
     for part in path.split("."):
-        if isinstance(msg, dict):
-            msg = msg.get(part)
-        elif isinstance(msg, list) and part.isdigit() and int(part) < len(msg):
-            msg = msg[int(part)]
-        else:
-            return None
+        msg = msg.get(part) if isinstance(msg, dict) else None
     return msg
 
 
@@ -80,28 +75,9 @@ def export_csv(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
 
 
 def export_jsonl(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
-    sink = _Sink()
-    for n, (msg_type, received_at, data) in enumerate(_rows(topic, start, end), 1):
-        record = {"topic": topic, "msg_type": msg_type, "received_at": received_at.isoformat(), "msg": data}
-        sink.write(_dumps(record) + "\n")
-        if n % CHUNK_ROWS == 0:
-            yield sink.drain()
-    yield sink.drain()
-
-
-def json_schema(msg: Any) -> dict[str, Any]:
-    """A JSON Schema inferred from one message (Foxglove uses it to list the fields)."""
-    if isinstance(msg, bool):
-        return {"type": "boolean"}
-    if isinstance(msg, int | float):
-        return {"type": "number"}
-    if isinstance(msg, str):
-        return {"type": "string"}
-    if isinstance(msg, list):
-        return {"type": "array", "items": json_schema(msg[0]) if msg else {}}
-    if isinstance(msg, dict):
-        return {"type": "object", "properties": {k: json_schema(v) for k, v in msg.items()}}
-    return {}
+    for batch in batched(_rows(topic, start, end), CHUNK_ROWS):
+        yield "".join(_dumps({"topic": topic, "msg_type": msg_type, "received_at": received_at.isoformat(),
+                              "msg": data}) + "\n" for msg_type, received_at, data in batch).encode()
 
 
 class _Sink:
@@ -121,9 +97,6 @@ class _Sink:
     def tell(self) -> int:
         return self.offset
 
-    def flush(self) -> None:
-        pass
-
     def drain(self) -> bytes:
         data, self.chunks = b"".join(self.chunks), []
         return data
@@ -131,28 +104,14 @@ class _Sink:
 
 def export_mcap(topic: str, start: datetime, end: datetime) -> Iterator[bytes]:
     """MCAP with JSON message encoding: one channel for the topic, one schema per message type."""
-    from mcap.writer import CompressionType, Writer
-
     sink = _Sink()
     # The writer only calls write() and tell(), which is all _Sink has of a file.
-    writer = Writer(cast(IO[Any], sink), chunk_size=1024 * 1024, compression=CompressionType.ZSTD)
-    writer.start(profile="", library="cyborg-commander")
-    channels: dict[str, int] = {}
+    mcap = JsonMcap(cast(IO[Any], sink), chunk_size=1024 * 1024)
     for n, (msg_type, received_at, data) in enumerate(_rows(topic, start, end), 1):
-        channel = channels.get(msg_type)
-        if channel is None:
-            schema = writer.register_schema(
-                name=msg_type, encoding="jsonschema", data=_dumps(json_schema(data)).encode()
-            )
-            channel = channels[msg_type] = writer.register_channel(
-                topic=topic, message_encoding="json", schema_id=schema, metadata={"ros_type": msg_type}
-            )
-        stamp = int(received_at.timestamp() * 1e9)
-        writer.add_message(channel_id=channel, log_time=stamp, publish_time=stamp, data=_dumps(data).encode(),
-                           sequence=n)
+        mcap.add(topic, msg_type, received_at.timestamp(), data, sequence=n)
         if n % CHUNK_ROWS == 0:
             yield sink.drain()
-    writer.finish()
+    mcap.writer.finish()
     yield sink.drain()
 
 

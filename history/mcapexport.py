@@ -1,6 +1,6 @@
-"""An incident as one MCAP file that opens in Foxglove: JSON-encoded channels.
+"""MCAP files that open in Foxglove (JSON-encoded channels): a topic's export and an incident.
 
-Every recorded topic in the window keeps its ROS name (schema named by its ROS type); the
+In an incident every recorded topic in the window keeps its ROS name (schema named by its ROS type); the
 camera is ``/camera`` as ``foxglove.CompressedImage`` and the pose also ``/pose`` as
 ``foxglove.PoseInFrame`` (Foxglove's well-known schemas, in their JSON form: bytes as
 base64), so the Image and 3D panels show them without any conversion.
@@ -11,11 +11,10 @@ from __future__ import annotations
 import base64
 import io
 import json
-from typing import Any
+from typing import IO, Any
 
 from mcap.writer import CompressionType, Writer
 
-from history.export import json_schema
 from history.frames import frame_file
 from history.models import CameraFrame, Incident, Sample
 from history.storage import utc
@@ -47,17 +46,49 @@ POSE_IN_FRAME_SCHEMA = {
 }
 
 
-def _ns(t: float) -> int:
-    return round(t * 1e9)
-
-
 def _stamp(t: float) -> dict[str, int]:
-    ns = _ns(t)
-    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+    sec, nsec = divmod(round(t * 1e9), 1_000_000_000)
+    return {"sec": sec, "nsec": nsec}
 
 
 def _json(value: Any) -> bytes:
-    return json.dumps(value, separators=(",", ":")).encode()
+    return json.dumps(value, separators=(",", ":"), ensure_ascii=False).encode()
+
+
+def json_schema(msg: Any) -> dict[str, Any]:
+    """A JSON Schema inferred from one message (Foxglove uses it to list the fields)."""
+    if isinstance(msg, bool):
+        return {"type": "boolean"}
+    if isinstance(msg, int | float):
+        return {"type": "number"}
+    if isinstance(msg, str):
+        return {"type": "string"}
+    if isinstance(msg, list):
+        return {"type": "array", "items": json_schema(msg[0]) if msg else {}}
+    if isinstance(msg, dict):
+        return {"type": "object", "properties": {k: json_schema(v) for k, v in msg.items()}}
+    return {}
+
+
+class JsonMcap:
+    """An MCAP writer of JSON messages: a channel per topic and schema, registered with its first message."""
+
+    def __init__(self, out: IO[Any], **options: Any) -> None:
+        self.writer = Writer(out, compression=CompressionType.ZSTD, **options)
+        self.writer.start(profile="", library="cyborg-commander")
+        self.channels: dict[tuple[str, str], int] = {}
+
+    def add(self, topic: str, schema_name: str, t: float, message: Any, *, schema: dict[str, Any] | None = None,
+            sequence: int = 0) -> None:
+        """``message`` at ``t`` (epoch seconds); without a ``schema``, one inferred from the first message."""
+        channel = self.channels.get((topic, schema_name))
+        if channel is None:
+            schema_id = self.writer.register_schema(name=schema_name, encoding="jsonschema",
+                                                    data=_json(schema or json_schema(message)))
+            channel = self.channels[topic, schema_name] = self.writer.register_channel(
+                topic=topic, message_encoding="json", schema_id=schema_id, metadata={"ros_type": schema_name})
+        ns = round(t * 1e9)
+        self.writer.add_message(channel, log_time=ns, publish_time=ns, data=_json(message), sequence=sequence)
 
 
 def topics_in(start: float, end: float) -> list[str]:
@@ -68,29 +99,19 @@ def topics_in(start: float, end: float) -> list[str]:
 def incident_mcap(incident: Incident, *, hidden: frozenset[str] = frozenset()) -> bytes:
     """The incident's window: every recorded message and camera frame in it."""
     out = io.BytesIO()
-    writer = Writer(out, compression=CompressionType.ZSTD)
-    writer.start(profile="", library="cyborg-commander")
-    writer.add_metadata("incident", {"id": str(incident.pk), "kind": incident.kind, "t": f"{incident.t:.3f}",
-                                     "summary": incident.summary, "by": incident.by, "driver": incident.driver})
-    channels: dict[str, int] = {}
+    mcap = JsonMcap(out)
+    mcap.writer.add_metadata("incident", {"id": str(incident.pk), "kind": incident.kind, "t": f"{incident.t:.3f}",
+                                          "summary": incident.summary, "by": incident.by, "driver": incident.driver})
     pose_name = ri.topic("robot_pose").name
-
-    def add(topic: str, schema_name: str, schema: dict[str, Any], t: float, message: Any) -> None:
-        if topic not in channels:
-            schema_id = writer.register_schema(name=schema_name, encoding="jsonschema", data=_json(schema))
-            channels[topic] = writer.register_channel(topic=topic, message_encoding="json", schema_id=schema_id,
-                                                      metadata={"ros_type": schema_name})
-        writer.add_message(channels[topic], log_time=_ns(t), publish_time=_ns(t), data=_json(message))
-
     rows = (Sample.objects.filter(received_at__gte=utc(incident.start), received_at__lte=utc(incident.end))
             .exclude(topic__in=hidden).order_by("received_at")
             .values_list("topic", "msg_type", "received_at", "data"))
     for topic, msg_type, at, data in rows.iterator(chunk_size=2000):
         t = at.timestamp()
-        add(topic, msg_type, json_schema(data), t, data)
+        mcap.add(topic, msg_type, t, data)
         if topic == pose_name and isinstance(data, dict):
             pose = {"timestamp": _stamp(t), "frame_id": ri.MAP_FRAME, "pose": data}
-            add(POSE_TOPIC, "foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA, t, pose)
+            mcap.add(POSE_TOPIC, "foxglove.PoseInFrame", t, pose, schema=POSE_IN_FRAME_SCHEMA)
     frames = CameraFrame.objects.filter(t__gte=incident.start, t__lte=incident.end).order_by("t")
     for frame in frames.iterator(chunk_size=500):
         try:
@@ -99,6 +120,6 @@ def incident_mcap(incident: Incident, *, hidden: frozenset[str] = frozenset()) -
             continue  # its file is gone (a disk cleaned by hand): the rest still exports
         image = {"timestamp": _stamp(frame.t), "frame_id": "camera", "format": "jpeg",
                  "data": base64.b64encode(jpeg).decode()}
-        add(CAMERA_TOPIC, "foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA, frame.t, image)
-    writer.finish()
+        mcap.add(CAMERA_TOPIC, "foxglove.CompressedImage", frame.t, image, schema=COMPRESSED_IMAGE_SCHEMA)
+    mcap.writer.finish()
     return out.getvalue()

@@ -258,11 +258,8 @@ current: Recorder | None = None
 
 async def run_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
-    global current
-    writer: Callable[[Sequence[Row]], int] = write_rows
-    if settings.HISTORY_BATCH_WRITER == "celery":
-        from history.tasks import celery_writer_for
+    from history.tasks import celery_writer_for
 
-        writer = celery_writer_for()
-    current = Recorder(writer=writer)
+    global current
+    current = Recorder(writer=celery_writer_for() if settings.HISTORY_BATCH_WRITER == "celery" else write_rows)
     await current.run(link)

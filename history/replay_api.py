@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from django.forms.models import model_to_dict
 from django.http import FileResponse, Http404, HttpResponse
 from django.urls import reverse
 from drf_spectacular.types import OpenApiTypes
@@ -103,10 +104,7 @@ def map_view(request: Request, sample_id: int) -> FileResponse:
 def incident_out(incident: Incident) -> dict[str, Any]:
     thumb = incident_thumbnail(incident)
     return {
-        "id": incident.pk, "kind": incident.kind, "kind_label": incident.get_kind_display(), "t": incident.t,
-        "start": incident.start, "end": incident.end, "summary": incident.summary, "by": incident.by,
-        "driver": incident.driver, "triggers": incident.triggers, "complete": incident.complete,
-        "held": incident.held, "released_by": incident.released_by,
+        **model_to_dict(incident), "kind_label": incident.get_kind_display(),  # every field but the row's creation
         "thumbnail": replay.frame_info(thumb)["url"] if thumb else None,  # type: ignore[index]
         "replay": f"{reverse('history:replay')}?incident={incident.pk}",
         "mcap": reverse("history-incident-mcap", args=[incident.pk]),

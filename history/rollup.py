@@ -81,22 +81,10 @@ def aggregate(messages: Iterable[tuple[str, float, Any]], levels: Iterable[int] 
             agg[4] += 1
     out: Aggregates = {}
     for level in levels:
-        for (topic, path, second), agg in seconds.items():
-            out_key = (topic, level, path, second // level)
-            into = out.get(out_key)
-            if into is None:
-                out[out_key] = list(agg)
-            else:
-                _merge(into, agg)
+        for (topic, path, second), (t, vmin, vmax, vsum, n) in seconds.items():
+            into = out.setdefault((topic, level, path, second // level), [math.inf, math.inf, -math.inf, 0.0, 0])
+            into[:] = min(into[0], t), min(into[1], vmin), max(into[2], vmax), into[3] + vsum, into[4] + n
     return out
-
-
-def _merge(into: list[float], agg: list[float]) -> None:
-    into[0] = min(into[0], agg[0])
-    into[1] = min(into[1], agg[1])
-    into[2] = max(into[2], agg[2])
-    into[3] += agg[3]
-    into[4] += agg[4]
 
 
 def level_for(width_ms: int) -> int | None:

@@ -28,12 +28,9 @@ def recorded_topics() -> list[dict[str, Any]]:
         last = Sample.objects.filter(topic=policy.topic).order_by("-received_at").first()
         if last is None and policy.mode == Mode.OFF:
             continue
-        out.append({
-            "topic": policy.topic, "msg_type": policy.msg_type, "mode": policy.mode,
-            "last": last.received_at if last else None,
-            "fields": numeric_fields(last.data) if last else [],
-            "text": has_text(last.data) if last else False,
-        })
+        data = last.data if last else None  # no sample: no fields, no text
+        out.append({"topic": policy.topic, "msg_type": policy.msg_type, "mode": policy.mode,
+                    "last": last.received_at if last else None, "fields": numeric_fields(data), "text": has_text(data)})
     return out
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from datetime import datetime, timedelta
+from datetime import UTC, datetime, timedelta
 
 from django.conf import settings
 from django.utils.dateparse import parse_datetime
@@ -25,18 +25,16 @@ TIME_MIN_S, TIME_MAX_S = 0.0, 7258118400.0
 def parse_time(value: str, *, name: str) -> datetime:
     """ISO 8601 (naive = UTC) or epoch seconds, between 1970 and 2200."""
     try:
-        seconds: float | None = float(value)
+        seconds = float(value)
     except ValueError:
-        seconds = None
-    if seconds is None:
         try:
-            parsed = parse_datetime(value.replace(" ", "+")) if value else None
+            parsed = parse_datetime(value.replace(" ", "+"))
         except ValueError as exc:  # well-formed but impossible, e.g. month 13
             raise serializers.ValidationError({name: f"{value!r} is not a valid time: {exc}"}) from None
         if parsed is None:
-            raise serializers.ValidationError({name: f"{value!r} is not an ISO 8601 time or epoch seconds"})
+            raise serializers.ValidationError({name: f"{value!r} is not an ISO 8601 time or epoch seconds"}) from None
         try:
-            seconds = (parsed if parsed.tzinfo else parsed.replace(tzinfo=utc(0).tzinfo)).timestamp()
+            seconds = (parsed if parsed.tzinfo else parsed.replace(tzinfo=UTC)).timestamp()
         except (OverflowError, ValueError):
             seconds = math.inf
     if not math.isfinite(seconds) or not TIME_MIN_S <= seconds <= TIME_MAX_S:

@@ -129,17 +129,13 @@ def write_rows(rows: Sequence[Row]) -> int:
             with connection.cursor() as cursor, cursor.copy(f"COPY {_TABLE} ({_COLUMNS}) FROM STDIN") as copy:
                 for row in rows:
                     copy.write_row((row[0], row[1], utc(row[2]), row[3]))
-        elif connection.vendor == "sqlite":
+        else:  # SQLite, the one other database history runs on
             adapt = connection.ops.adapt_datetimefield_value
             with connection.cursor() as cursor:
                 cursor.executemany(
                     f"INSERT INTO {_TABLE} ({_COLUMNS}) VALUES (%s, %s, %s, %s)",
                     [(row[0], row[1], adapt(utc(row[2])), row[3]) for row in rows],
                 )
-        else:
-            Sample.objects.bulk_create(
-                Sample(topic=r[0], msg_type=r[1], received_at=utc(r[2]), data=json.loads(r[3])) for r in rows
-            )
         write_rollups(aggregate((r[0], r[2], r[4] if len(r) > 4 else json.loads(r[3])) for r in rows))
         _forget_late_buckets(rows)
     return len(rows)
@@ -147,27 +143,23 @@ def write_rows(rows: Sequence[Row]) -> int:
 
 def _forget_late_buckets(rows: Sequence[Row]) -> None:
     horizon = time.time() - SETTLE_S
-    spans: dict[str, list[float]] = defaultdict(lambda: [float("inf"), float("-inf")])
+    late: dict[str, list[float]] = defaultdict(list)
     for row in rows:
-        topic, t = row[0], row[2]
-        if t < horizon:
-            span = spans[topic]
-            span[0], span[1] = min(span[0], t), max(span[1], t)
-    for topic, (lo, hi) in spans.items():
-        forget_buckets(topic=topic, start_ms=lo * 1000, end_ms=hi * 1000)
+        if row[2] < horizon:
+            late[row[0]].append(row[2])
+    for topic, times in late.items():
+        forget_buckets(topic=topic, start=min(times), end=max(times))
 
 
-def forget_buckets(*, topic: str, start_ms: float | None = None, end_ms: float | None = None) -> int:
-    """Drop cached buckets of ``topic`` that overlap [start_ms, end_ms]."""
+def forget_buckets(*, topic: str, start: float | None, end: float) -> int:
+    """Drop cached buckets of ``topic`` that overlap [start, end] (epoch seconds; no start: all before end)."""
     big: BigIntegerField[int, int] = BigIntegerField()
     buckets = SeriesBucket.objects.filter(topic=topic).alias(
         b_start=ExpressionWrapper(F("index") * F("width_ms"), output_field=big),
         b_end=ExpressionWrapper((F("index") + 1) * F("width_ms"), output_field=big),
-    )
-    if start_ms is not None:
-        buckets = buckets.filter(b_end__gt=math.floor(start_ms))
-    if end_ms is not None:
-        buckets = buckets.filter(b_start__lte=math.ceil(end_ms))
+    ).filter(b_start__lte=math.ceil(end * 1000))
+    if start is not None:
+        buckets = buckets.filter(b_end__gt=math.floor(start * 1000))
     return buckets.delete()[0]
 
 
@@ -194,8 +186,8 @@ def _rollup_upsert(vendor: str) -> str:
 
 def write_rollups(aggregates: Aggregates) -> None:
     """Merge rollups into the stored ones (inside the caller's transaction)."""
-    if not aggregates or connection.vendor not in ("postgresql", "sqlite"):
-        return  # elsewhere series come from the JSON alone
+    if not aggregates:
+        return
     # In key order, so concurrent writers (Celery workers) lock rows in the same order: no deadlocks.
     rows = [(*key, *aggregates[key]) for key in sorted(aggregates)]
     with connection.cursor() as cursor:
@@ -223,4 +215,4 @@ def samples_deleted(*, topic: str, start: float | None, end: float) -> None:
     """Bring rollups and cached buckets in line after ``topic``'s samples in [start, end] were deleted."""
     with transaction.atomic():
         rebuild_rollups(topic=topic, start=start, end=end)
-        forget_buckets(topic=topic, start_ms=None if start is None else start * 1000, end_ms=end * 1000)
+        forget_buckets(topic=topic, start=start, end=end)
