@@ -47,9 +47,9 @@ class SimThread:
             await self.robot.start()
         except BaseException as exc:
             self._error = exc
-            self._ready.set()
             return
-        self._ready.set()
+        finally:
+            self._ready.set()
         await self._stopped.wait()
         await self.robot.stop()
 

@@ -184,22 +184,16 @@ class Broker:
                 log.exception("handler for %s failed", topic)
 
 
-_STR = (str,)
-_INT = (int,)
-_BOOL = (bool,)
-
-
-def _check(frame: dict[str, Any], spec: list[tuple[bool, str, tuple[type, ...]]]) -> None:
+def _check(frame: dict[str, Any], spec: list[tuple[bool, str, type]]) -> None:
     # rosbridge_library's Capability.basic_type_check (isinstance, so bool passes for int).
-    for mandatory, name, types in spec:
+    for mandatory, name, expected in spec:
         if name not in frame:
             if mandatory:
                 raise ProtocolError(f"Expected a {name} field but none was found.")
             continue
-        if not isinstance(frame[name], types):
-            names = ", ".join(t.__name__ for t in types)
+        if not isinstance(frame[name], expected):
             raise ProtocolError(
-                f"Expected field {name} to have one of types ({names}), but it has type "
+                f"Expected field {name} to have one of types ({expected.__name__}), but it has type "
                 f"{type(frame[name]).__name__}"
             )
 
@@ -297,18 +291,18 @@ class Client:
         return known or claimed  # type: ignore[return-value]
 
     def op_advertise(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "topic", _STR), (True, "type", _STR), (False, "latch", _BOOL),
-                       (False, "queue_size", _INT)])
+        _check(frame, [(True, "topic", str), (True, "type", str), (False, "latch", bool),
+                       (False, "queue_size", int)])
         topic = frame["topic"]
         self.broker.types[topic] = self._topic_type(topic, frame["type"])
         self.broker.publishers[topic].add(self.id)
 
     def op_unadvertise(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "topic", _STR)])
+        _check(frame, [(True, "topic", str)])
         self.broker.publishers[frame["topic"]].discard(self.id)
 
     def op_publish(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "topic", _STR), (False, "latch", _BOOL), (False, "queue_size", _INT)])
+        _check(frame, [(True, "topic", str), (False, "latch", bool), (False, "queue_size", int)])
         topic = frame["topic"]
         msg_type = self._topic_type(topic, None)
         raw_msg = frame.get("msg", {})
@@ -322,9 +316,9 @@ class Client:
         self.broker.deliver(topic, msg, bool(frame.get("latch", False)))
 
     def op_subscribe(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "topic", _STR), (False, "type", _STR), (False, "throttle_rate", _INT),
-                       (False, "fragment_size", _INT), (False, "queue_length", _INT),
-                       (False, "compression", _STR)])
+        _check(frame, [(True, "topic", str), (False, "type", str), (False, "throttle_rate", int),
+                       (False, "fragment_size", int), (False, "queue_length", int),
+                       (False, "compression", str)])
         topic = frame["topic"]
         self.broker.types[topic] = self._topic_type(topic, frame.get("type"))
         subs = self.broker.subs[topic]
@@ -338,7 +332,7 @@ class Client:
             self.send(latched)
 
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "topic", _STR)])
+        _check(frame, [(True, "topic", str)])
         topic = frame["topic"]
         sub = self.broker.subs.get(topic, {}).get(self.id)
         if sub is None:
@@ -353,7 +347,7 @@ class Client:
             self.broker.unsubscribe(self.id, topic)
 
     def op_call_service(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "service", _STR), (False, "fragment_size", _INT), (False, "compression", _STR)])
+        _check(frame, [(True, "service", str), (False, "fragment_size", int), (False, "compression", str)])
         name = frame["service"]
         args = frame.get("args", {})
         provider = self.broker.client_services.get(name)
@@ -377,17 +371,17 @@ class Client:
         self.respond(mid, name, values, ok)
 
     def op_advertise_service(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "service", _STR), (True, "type", _STR)])
+        _check(frame, [(True, "service", str), (True, "type", str)])
         self.broker.client_services[frame["service"]] = (self, frame["type"])
 
     def op_unadvertise_service(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "service", _STR)])
+        _check(frame, [(True, "service", str)])
         owner = self.broker.client_services.get(frame["service"])
         if owner and owner[0] is self:
             del self.broker.client_services[frame["service"]]
 
     def op_service_response(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "service", _STR), (True, "result", _BOOL)])
+        _check(frame, [(True, "service", str), (True, "result", bool)])
         pending = self.broker.pending_calls.pop(mid, None)
         if pending is None:
             return
@@ -395,7 +389,7 @@ class Client:
         caller.respond(caller_id, name, frame.get("values", {}), frame["result"])
 
     def op_fragment(self, frame: dict[str, Any], mid: Any) -> None:
-        _check(frame, [(True, "id", _STR), (True, "data", _STR), (True, "num", _INT), (True, "total", _INT)])
+        _check(frame, [(True, "id", str), (True, "data", str), (True, "num", int), (True, "total", int)])
         parts = self.fragments.setdefault(mid, {})
         parts[frame["num"]] = frame["data"]
         if len(parts) == frame["total"]:

@@ -73,7 +73,6 @@ class SimRobot:
         self.host = host
         self.port = port
         self.video_port = video_port
-        self.seed = seed
         self.tick_s = 1.0 / tick_hz
         self.rng = random.Random(seed)
         self.world = build(map_name, seed)
@@ -87,7 +86,6 @@ class SimRobot:
 
         self.nodes: list[SimNode] = []
         self._started = False
-        self.bridge = BridgeNode(self.rng)
         # Added in tick order: physics, then navigation, emotions, state timers.
         self.base_node = self.add(BaseNode(self.base, self.world, self.rng, pose_rate_hz, battery_soc,
                                            battery_drain_per_s, battery_charge_per_s))
@@ -102,7 +100,7 @@ class SimRobot:
         self.base_node.battery_low = self.controller.battery_low
         self.commander = self.add(CommanderNode(commander_pause_s))
         self.add(DiagnosticsNode(self.base_node))
-        self.add(self.bridge)
+        self.bridge = self.add(BridgeNode(self.rng))
         self.add(GraphNode(lambda: self.nodes))
         self.server: RosbridgeServer | None = None
         self.video: VideoServer | None = None
@@ -114,7 +112,6 @@ class SimRobot:
         if self._started:
             raise RuntimeError("add nodes before start()")
         self.nodes.append(node)
-        self.bridge.graph_nodes.extend(node.names)
         return node
 
     @property

@@ -23,11 +23,10 @@ CHATTER = (
 class BridgeNode(SimNode):
     names = NODES
     publishes = ("client_count",)
-    answers = ("rosapi_topics", "rosapi_topic_type", "rosapi_services", "rosapi_nodes", "rosapi_get_time")
+    answers = ("rosapi_topics", "rosapi_topic_type", "rosapi_services", "rosapi_get_time")
 
     def __init__(self, rng: random.Random) -> None:
         self.rng = rng
-        self.graph_nodes: list[str] = []  # every node the simulator plays (SimRobot.add fills it in)
         self.params: dict[str, Any] = {"/rosdistro": "noetic", "/use_sim_time": False,
                                        "/robot_description": "Pioneer LX (simulated)"}
 
@@ -39,7 +38,6 @@ class BridgeNode(SimNode):
                                               "types": [broker.types[n] for n in sorted(broker.types)]})
         bus.answer("rosapi_topic_type", lambda r: {"type": broker.types.get(r["topic"], "")})
         bus.answer("rosapi_services", lambda r: {"services": sorted(broker.services)})
-        bus.answer("rosapi_nodes", lambda r: {"nodes": list(self.graph_nodes)})
         bus.answer("rosapi_get_time", lambda r: {"time": messages.stamp()})
         bus.answer_name("/rosapi/topics_for_type", "rosapi/TopicsForType", lambda r: {
             "topics": sorted(t for t, ty in broker.types.items() if ty == r["type"])})

@@ -1,4 +1,4 @@
-"""rosapi's view of the graph: who publishes and subscribes to what, and each node's details.
+"""rosapi's view of the graph: the nodes, who publishes and subscribes to what, and each node's details.
 
 Answered from what the simulator really does, so it agrees with ``/rosapi/topics`` and
 ``/rosapi/nodes``: a topic's publishers are the node that declares it in ``publishes`` (or, for
@@ -21,13 +21,14 @@ BRIDGE = "/rosbridge_websocket"
 
 class GraphNode(SimNode):
     names: tuple[str, ...] = ()  # part of /rosapi (the bridge node names it)
-    answers = ("rosapi_publishers", "rosapi_subscribers", "rosapi_node_details")
+    answers = ("rosapi_nodes", "rosapi_publishers", "rosapi_subscribers", "rosapi_node_details")
 
     def __init__(self, nodes: Callable[[], Sequence[SimNode]]) -> None:
         self.nodes = nodes
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
+        bus.answer("rosapi_nodes", lambda r: {"nodes": self._graph_nodes()})
         bus.answer("rosapi_publishers", lambda r: {"publishers": self.publishers(r["topic"])})
         bus.answer("rosapi_subscribers", lambda r: {"subscribers": self.subscribers(r["topic"])})
         bus.answer("rosapi_node_details", lambda r: self.node_details(r["node"]))

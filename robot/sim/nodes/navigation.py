@@ -111,7 +111,6 @@ class NavigationNode(SimNode):
         self.bus.rosout(2, "/move_base",
                         f"Got new plan ({len(path)} poses, {1000 * (time.perf_counter() - t0):.0f} ms)")
         self.navigator.start(path, yaw, self.bus.clock.now())
-        goal.data["target"] = (x, y, yaw)
         self._pub_plan(force=True)
 
     def _move_base_cancel(self, goal: Goal) -> None:
