@@ -3,7 +3,6 @@
 Routes:
   GET  /stream?topic=T[&type=mjpeg&quality=Q&width=W&height=H]  multipart MJPEG, ~8 fps
   GET  /snapshot?topic=T[&quality=Q&width=W&height=H]           one JPEG
-  GET  /stream_viewer?topic=T, GET /                              small HTML pages
   GET  /sim/introspect                                            the simulator's snapshot() as JSON
   GET  /sim/received?topic=T&last=N                               {"count", "messages": [{"t", "msg"}]}
   POST /sim/publish  {"topic", "msg", "count"?}                   publish to the topic's subscribers
@@ -25,7 +24,6 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from .host import CameraHost
-from .server import set_nodelay
 
 log = logging.getLogger("robot.sim.camera")
 
@@ -133,7 +131,6 @@ class VideoServer:
             log.warning("video server did not close within 3 s")
 
     async def _handle(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        set_nodelay(writer.transport)
         self.writers.add(writer)
         try:
             request = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), 10.0)
@@ -145,11 +142,10 @@ class VideoServer:
                 body = await reader.readexactly(int(headers["content-length"]))
             url = urlsplit(target)
             await self._route(method, url.path, parse_qs(url.query), body, writer)
-        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError):
-            pass
-        except asyncio.CancelledError:
-            # The server stopping (a Ctrl-C): end quietly. Nobody awaits this task, and asyncio's stream
-            # callback on 3.12.1 asks a cancelled one for its exception and logs the CancelledError.
+        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError,
+                asyncio.CancelledError):
+            # Cancelled: the server stopping (a Ctrl-C), ended quietly. Nobody awaits this task, and asyncio's
+            # stream callback on 3.12.1 asks a cancelled one for its exception and logs the CancelledError.
             pass
         except Exception:
             log.exception("video server request failed")
@@ -179,13 +175,6 @@ class VideoServer:
             jpeg = await asyncio.to_thread(self.renderer.frame, _int(q, "width", 640), _int(q, "height", 480),
                                            _int(q, "quality", 80))
             return "200 OK", "image/jpeg", jpeg
-        if method == "GET" and path == "/stream_viewer":
-            topic = q.get("topic", [""])[0]
-            html = f"<html><body><h1>{topic}</h1><img src='/stream?topic={topic}'></body></html>"
-            return "200 OK", "text/html", html.encode()
-        if method == "GET" and path == "/":
-            return "200 OK", "text/html", (b"<html><body><h1>Available ROS Image Topics:</h1><ul><li><a href="
-                                           b"'/stream_viewer?topic=/videostream'>/videostream</a></li></ul></body></html>")
         if method == "GET" and path == "/sim/introspect":
             return _json(robot.snapshot())
         if method == "GET" and path == "/sim/received":

@@ -15,8 +15,7 @@ from .world import Base, WorldMap
 class BridgeHost(Protocol):
     """The rosbridge server's view: the graph that clients' frames act on, and a hook for (dis)connects."""
 
-    @property
-    def broker(self) -> Broker: ...
+    broker: Broker
 
     def client_connected(self) -> None: ...
 
@@ -24,11 +23,8 @@ class BridgeHost(Protocol):
 class CameraHost(Protocol):
     """The camera's view: what to draw, and the introspection its HTTP routes serve."""
 
-    @property
-    def world(self) -> WorldMap: ...
-
-    @property
-    def base(self) -> Base: ...
+    world: WorldMap
+    base: Base
 
     def plan(self) -> list[tuple[float, float]]: ...
 

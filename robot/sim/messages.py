@@ -328,16 +328,12 @@ def normalize_request(srv_type: str, args: Any) -> dict[str, Any]:
 def typedefs(msg_type: str) -> list[dict[str, Any]]:
     """rosapi/MessageDetails: the type and every nested type, in the rosapi TypeDef layout."""
     seen: list[str] = []
-
-    def visit(t: str) -> None:
-        if t in seen or t not in SCHEMAS:
-            return
-        seen.append(t)
-        for _, ftype, _ in SCHEMAS[t]:
-            if ftype not in PRIMITIVES:
-                visit(ftype)
-
-    visit(msg_type)
+    todo = [msg_type]  # depth first, each type before the types of its fields
+    while todo:
+        t = todo.pop(0)
+        if t not in seen and t in SCHEMAS:
+            seen.append(t)
+            todo[:0] = [ftype for _, ftype, _ in SCHEMAS[t] if ftype not in PRIMITIVES]
     out = []
     for t in seen:
         schema = SCHEMAS[t]

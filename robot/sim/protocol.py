@@ -146,9 +146,6 @@ class Broker:
     def subscription_count(self, topic: str) -> int:
         return sum(len(s.params) for s in self.subs.get(topic, {}).values())
 
-    def received(self, topic: str) -> list[Received]:
-        return list(self.received_msgs.get(topic, ()))
-
     # --- client side -----------------------------------------------------------------
 
     def connect(self, client: Client) -> None:

@@ -189,10 +189,10 @@ class SimRobot:
         return self.broker.subscription_count(topic_name)
 
     def received(self, topic_name: str) -> list[dict[str, Any]]:
-        return [r.msg for r in self.broker.received(topic_name)]
+        return [r.msg for r in self.broker.received_msgs.get(topic_name, ())]
 
     def received_with_times(self, topic_name: str, last: int | None = None) -> list[dict[str, Any]]:
-        items = self.broker.received(topic_name)
+        items = list(self.broker.received_msgs.get(topic_name, ()))
         if last is not None:
             items = items[-last:] if last > 0 else []
         return [{"t": r.t, "msg": r.msg} for r in items]

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
-import socket
-from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
@@ -14,12 +13,6 @@ from .host import BridgeHost
 from .protocol import Client
 
 log = logging.getLogger("robot.sim.server")
-
-
-def set_nodelay(transport: Any) -> None:
-    sock = transport.get_extra_info("socket") if transport is not None else None
-    if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
 class RosbridgeServer:
@@ -49,7 +42,6 @@ class RosbridgeServer:
             log.warning("websocket server did not close within 3 s")
 
     async def _handle(self, ws: ServerConnection) -> None:
-        set_nodelay(ws.transport)
         self.connections.add(ws)
         broker = self.robot.broker
         address = ws.remote_address[0] if ws.remote_address else ""
@@ -71,7 +63,5 @@ class RosbridgeServer:
 
     @staticmethod
     async def _write(client: Client) -> None:
-        try:
+        with contextlib.suppress(ConnectionClosed):
             await client.run_writer()
-        except ConnectionClosed:
-            pass
