@@ -14,7 +14,7 @@ import asyncio
 import hashlib
 import json
 import time
-from collections import OrderedDict
+from functools import lru_cache
 from typing import Any
 
 from django.conf import settings
@@ -40,7 +40,9 @@ def caller(scope: dict[str, Any]) -> str:
 class ReadThrottle:
     def __init__(self, app: Any) -> None:
         self.app = app
-        self.buckets: OrderedDict[str, Bucket] = OrderedDict()
+        # A bucket per caller; past KEPT_CALLERS the least recently seen is forgotten.
+        self._bucket = lru_cache(maxsize=KEPT_CALLERS)(
+            lambda key: Bucket(settings.READ_THROTTLE_BURST, time.monotonic()))
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         rate = settings.READ_THROTTLE_PER_S
@@ -56,17 +58,6 @@ class ReadThrottle:
         if wait:
             await asyncio.sleep(wait)
         await self.app(scope, receive, send)
-
-    def _bucket(self, key: str) -> Bucket:
-        bucket = self.buckets.get(key)
-        if bucket is None:
-            bucket = self.buckets[key] = Bucket(settings.READ_THROTTLE_BURST, time.monotonic())
-            if len(self.buckets) > KEPT_CALLERS:
-                self.buckets.popitem(last=False)
-        else:
-            self.buckets.move_to_end(key)
-        return bucket
-
 
 async def _too_many(send: Any, retry_after: float) -> None:
     body = json.dumps({"detail": f"Too many reads: at most {settings.READ_THROTTLE_PER_S:g} per second; "

@@ -85,9 +85,6 @@ class Subscriptions(Upkeep):
         if topic is not None:
             topic.unsubscribe()
 
-    def holders(self, name: str) -> frozenset[str]:
-        return frozenset(self._holders.get(name, ()))
-
     @property
     def subscribed(self) -> set[str]:
         return set(self._subscriptions)
