@@ -41,9 +41,7 @@ class Capture[T]:
         return (entry for entry in self.ring if not entry[2] and start <= entry[0] <= end)
 
     def release_past(self, now: float) -> None:
-        for incident, (_, end) in list(self.windows.items()):
-            if end < now:
-                del self.windows[incident]
+        self.windows = {incident: window for incident, window in self.windows.items() if window[1] >= now}
 
     def _batch(self, pending: list[T]) -> Sequence[Any]:
         """What the writer is given for the pending items."""

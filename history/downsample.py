@@ -94,14 +94,6 @@ def _sql(segments: list[str]) -> tuple[str, list]:
     raise NotImplementedError(f"downsampling is not implemented for {connection.vendor}")
 
 
-def _scan(topic: str, segments: list[str], width: int, lo: int, hi: int) -> dict[int, Agg]:
-    """Aggregate buckets lo..hi (inclusive) straight from the samples."""
-    sql, path_params = _sql(segments)
-    adapt = connection.ops.adapt_datetimefield_value
-    start, end = adapt(utc(lo * width / 1000)), adapt(utc((hi + 1) * width / 1000))
-    return _buckets(sql, [width, *path_params, topic, start, end])
-
-
 def _buckets(sql: str, params: list) -> dict[int, Agg]:
     with connection.cursor() as cursor:
         cursor.execute(sql, params)
@@ -131,7 +123,7 @@ def _from_rollups(topic: str, field: str, level: int, width: int, b0: int, b1: i
 
 def _from_samples(topic: str, field: str, width: int, b0: int, b1: int, now: float | None) -> dict[int, Agg]:
     """Buckets b0..b1 from the JSON: the cached settled ones, the rest scanned (and cached once settled)."""
-    segments = parse_field(field)
+    sql, path_params = _sql(parse_field(field))
     settled = math.floor(((now or time.time()) - SETTLE_S) * 1000 / width) - 1
     cached: dict[int, Agg] = {
         r.index: (r.t_first, r.vmin, r.vmax, r.vsum, r.n)
@@ -141,8 +133,10 @@ def _from_samples(topic: str, field: str, width: int, b0: int, b1: int, now: flo
     }
     missing = [i for i in range(b0, b1 + 1) if i not in cached]
     fresh: dict[int, Agg] = {}
-    for lo, hi in _runs(missing):
-        fresh.update(_scan(topic, segments, width, lo, hi))
+    adapt = connection.ops.adapt_datetimefield_value
+    for lo, hi in _runs(missing):  # buckets lo..hi (inclusive) straight from the samples
+        start, end = adapt(utc(lo * width / 1000)), adapt(utc((hi + 1) * width / 1000))
+        fresh.update(_buckets(sql, [width, *path_params, topic, start, end]))
     to_cache = [
         SeriesBucket(topic=topic, field=field, width_ms=width, index=i, t_first=a[0], vmin=a[1], vmax=a[2],
                      vsum=a[3], n=a[4])

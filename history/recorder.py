@@ -105,7 +105,10 @@ class Recorder:
             else:
                 seen[1], seen[2] = t, seen[2] + 1
             if len(self._buffer) >= self.buffer_rows:
-                self._drop(name)
+                self.dropped += 1
+                if self.dropped == 1 or self.dropped % 1000 == 0:
+                    log.error("history: buffer full (%d rows); dropped %d messages so far (last on %s)",
+                              self.buffer_rows, self.dropped, name)
                 return
             self._buffer.append((name, msg_type, msg, t))
             if len(self._buffer) >= self.batch_rows and self._full is not None:
@@ -146,12 +149,6 @@ class Recorder:
             topics[name] = [last_t, (n - 1) / (last - first) if last > first else 0.0, seq]
         # A topic this recorder has not written yet keeps the previous recorder's mark.
         return {"topics": {**self._previous, **topics}, "lost": dict(self.lost_total)}
-
-    def _drop(self, name: str) -> None:
-        self.dropped += 1
-        if self.dropped == 1 or self.dropped % 1000 == 0:
-            log.error("history: buffer full (%d rows); dropped %d messages so far (last on %s)",
-                      self.buffer_rows, self.dropped, name)
 
     def apply(self, policies: dict[str, Policy]) -> None:
         self.policies = policies
@@ -207,7 +204,9 @@ class Recorder:
                 except TimeoutError:
                     pass
                 self._full.clear()
-                self._note_link(link)
+                if hasattr(link, "connected"):
+                    self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since,
+                                                           now=time.time()))
                 await self.flush()
                 await self.publish_latest(link.store)
         finally:
@@ -218,10 +217,6 @@ class Recorder:
                 await self.publish_latest(link.store)
             except Exception:
                 log.warning("history: could not leave the recorder's watermark on stopping", exc_info=True)
-
-    def _note_link(self, link: Any) -> None:
-        if hasattr(link, "connected"):
-            self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since, now=time.time()))
 
     async def reload(self, link: Any) -> None:
         policies = await self._reload_log.attempt(load_policies)

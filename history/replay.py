@@ -140,12 +140,10 @@ def rendered_map(sample_id: int) -> tuple[str, dict[str, Any]]:
 
 
 def map_png(sample_id: int) -> Path:
-    version, _ = rendered_map(sample_id)
-    path = replay_map_dir() / f"{version}.png"
+    path = replay_map_dir() / f"{rendered_map(sample_id)[0]}.png"
     if not path.exists():  # pruned by a newer render: draw it again
         rendered_map.cache_clear()
-        version, _ = rendered_map(sample_id)
-        path = replay_map_dir() / f"{version}.png"
+        path = replay_map_dir() / f"{rendered_map(sample_id)[0]}.png"
     return path
 
 
