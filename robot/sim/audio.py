@@ -88,15 +88,6 @@ MIC_CODINGS = ("wave", "mp3")
 MP3_KBPS = 32
 
 
-def mp3_encoder(rate: int, kbps: int = MP3_KBPS) -> lameenc.Encoder:
-    encoder = lameenc.Encoder()
-    encoder.set_bit_rate(kbps)
-    encoder.set_in_sample_rate(rate)
-    encoder.set_channels(1)
-    encoder.set_quality(7)  # fast; a tone needs no more
-    return encoder
-
-
 class Microphone:
     """Publishes a tone in ``chunk_s`` chunks, paced by the clock, while anyone subscribes:
     raw S16LE (``coding="wave"``) or a continuous mp3 stream (``coding="mp3"``)."""
@@ -108,7 +99,13 @@ class Microphone:
         self.publish, self.wanted = publish, wanted
         self.freq_hz, self.rate, self.chunk = freq_hz, rate, int(rate * chunk_s)
         self.coding = coding
-        self.encoder = mp3_encoder(rate) if coding == "mp3" else None
+        self.encoder: lameenc.Encoder | None = None
+        if coding == "mp3":
+            self.encoder = lameenc.Encoder()
+            self.encoder.set_bit_rate(MP3_KBPS)
+            self.encoder.set_in_sample_rate(rate)
+            self.encoder.set_channels(1)
+            self.encoder.set_quality(7)  # fast; a tone needs no more
         self.samples = 0  # published so far (the tone's phase)
         self.published = 0
 

@@ -16,6 +16,7 @@ import json
 import logging
 import math
 import time
+from datetime import datetime
 from functools import cached_property
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
@@ -84,9 +85,8 @@ class Renderer:
         draw.ellipse((px - rad, py - rad, px + rad, py + rad), fill=(220, 60, 40), outline=(0, 0, 0))
         draw.line((px, py, px + rad * 1.6 * math.cos(b.yaw), py - rad * 1.6 * math.sin(b.yaw)),
                   fill=(0, 0, 0), width=3)
-        now = time.time()
-        local = time.localtime(now)
-        stamp = f"{time.strftime('%Y-%m-%d %H:%M:%S', local)}.{int(now * 1000) % 1000:03d} {time.strftime('%Z', local)}"
+        now = datetime.now().astimezone()
+        stamp = f"{now:%Y-%m-%d %H:%M:%S}.{now.microsecond // 1000:03d} {now:%Z}"
         text = f"{stamp}  x={b.x:.2f} y={b.y:.2f} {r.caption()}"
         draw.rectangle((0, 0, width, 16), fill=(0, 0, 0))
         draw.text((4, 2), text, fill=(255, 255, 255))

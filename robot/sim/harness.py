@@ -25,7 +25,7 @@ class SimThread:
         self.loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
-        self._stopped: asyncio.Event | None = None
+        self._stopped = asyncio.Event()  # bound to the simulator's loop when first awaited there
         self._error: BaseException | None = None
 
     # --- lifecycle -------------------------------------------------------------------
@@ -42,7 +42,6 @@ class SimThread:
 
     async def _main(self) -> None:
         self.loop = asyncio.get_running_loop()
-        self._stopped = asyncio.Event()
         try:
             await self.robot.start()
         except BaseException as exc:
@@ -56,9 +55,7 @@ class SimThread:
     def stop(self, timeout: float = 10.0) -> None:
         if self.loop is None or self._thread is None or not self._thread.is_alive():
             return
-        stopped = self._stopped
-        assert stopped is not None
-        self.loop.call_soon_threadsafe(stopped.set)
+        self.loop.call_soon_threadsafe(self._stopped.set)
         self._thread.join(timeout)
 
     def __enter__(self) -> SimThread:

@@ -165,9 +165,7 @@ class Broker:
             self.unsubscribe(client.id, topic)
         for pubs in self.publishers.values():
             pubs.discard(client.id)
-        for name, (owner, _) in list(self.client_services.items()):
-            if owner is client:
-                del self.client_services[name]
+        self.client_services = {n: s for n, s in self.client_services.items() if s[0] is not client}
 
     def deliver(self, topic: str, msg: dict[str, Any], latch: bool) -> None:
         """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
@@ -209,8 +207,7 @@ class Client:
         self.address = address
         self.connected_at = time.time()
         self._send = send  # coroutine function: await send(text)
-        self.outbox: collections.deque[str] = collections.deque()
-        self._wake = asyncio.Event()
+        self.outbox: asyncio.Queue[str] = asyncio.Queue()
         self.closed = False
         self.fragments: dict[Any, dict[int, str]] = {}
 
@@ -218,8 +215,7 @@ class Client:
 
     def send(self, frame: str) -> None:
         if not self.closed:
-            self.outbox.append(frame)
-            self._wake.set()
+            self.outbox.put_nowait(frame)
 
     async def send_now(self, frame: str) -> None:
         if not self.closed:
@@ -227,10 +223,7 @@ class Client:
 
     async def run_writer(self) -> None:
         while not self.closed:
-            await self._wake.wait()
-            self._wake.clear()
-            while self.outbox:
-                await self._send(self.outbox.popleft())
+            await self._send(await self.outbox.get())
 
     def reply(self, frame: dict[str, Any]) -> None:
         self.send(messages.encode(frame))

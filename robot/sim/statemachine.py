@@ -63,10 +63,6 @@ class StateMachine:
         """The top-level state (``behaviour`` for any leaf inside the container)."""
         return "behaviour" if self.state in BEHAVIOUR_STATES else self.state
 
-    @property
-    def in_navigation(self) -> bool:
-        return self.state in NAVIGATION_LEAVES
-
     def accepts(self, event: str) -> bool:
         return event in TABLE[self.state]
 
@@ -88,9 +84,9 @@ class StateMachine:
         """(path, initial_states, active_states) of each active container."""
         out = [("/SM_ROOT", ["startup"], [self.top])]
         if self.state in BEHAVIOUR_STATES:
-            leaf = "navigation" if self.in_navigation else self.state
+            leaf = "navigation" if self.state in NAVIGATION_LEAVES else self.state
             out.append(("/SM_ROOT/behaviour", ["idle"], [leaf]))
-            if self.in_navigation:
+            if self.state in NAVIGATION_LEAVES:
                 out.append(("/SM_ROOT/behaviour/navigation", ["navigation_planning"], [self.state]))
         return out
 

@@ -185,9 +185,7 @@ class Planner:
         sr, sc = self.to_cell(*start)
         gr, gc = self.to_cell(*goal)
         h, w = self.h, self.w
-        if not (0 <= gr < h and 0 <= gc < w) or self.cost[gr, gc] < 0:
-            return None
-        if not (0 <= sr < h and 0 <= sc < w):
+        if not (0 <= gr < h and 0 <= gc < w and 0 <= sr < h and 0 <= sc < w) or self.cost[gr, gc] < 0:
             return None
         cost = self.cost.tolist()
         sq2 = math.sqrt(2.0)
