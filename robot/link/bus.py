@@ -164,7 +164,6 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
             return await direct.ask(request, timeout)
         except direct.Unreachable:
             pass  # no link listens there (an older one, or none yet): the usual way
-    # Leases of watched topics reach the link even while the robot is away (it subscribes on return).
     # These reach a link whose robot is away: leases of watched topics (it subscribes on return), and
     # acknowledging an alert (the robot being offline is one).
     if request["op"] not in ("reconnect", "topics_watch", "alert_ack"):

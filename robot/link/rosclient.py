@@ -32,6 +32,7 @@ from twisted.python import threadable
 from cyborg_site.text import scrub_json
 from robot.link.wire import LARGE_FRAME_BYTES, decode_frame, may_hold_surrogates
 from robot.live import trace
+from robot.live.groups import LinkReply
 
 log = logging.getLogger(__name__)
 
@@ -136,7 +137,7 @@ class LinkRos(roslibpy.Ros):
 
 
 async def call_service(ros: roslibpy.Ros, name: str, service_type: str, args: dict[str, Any],
-                       timeout: float) -> dict[str, Any]:
+                       timeout: float) -> LinkReply:
     """Call a service over ``ros`` from the event loop without blocking it: the link's reply shape
     (``ok`` and ``values``, or ``error_code`` and ``error``)."""
     loop = asyncio.get_running_loop()

@@ -160,6 +160,5 @@ class Serving(Subscriptions):
             return refused
         assert self.ros is not None
         timeout = float(request.get("timeout") or self.service_timeout_s)
-        reply = await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
-                                   timeout)
-        return cast(LinkReply, reply)
+        return await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
+                                  timeout)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from typing import Any, cast
+from typing import Any
 
 import roslibpy
 from django.conf import settings
@@ -77,7 +77,7 @@ class StandbyStop:
             self._publish(request["topic"], request["msg_type"], msg)
             return {"ok": True}
         timeout = float(request.get("timeout") or settings.ROBOT_REQUEST_TIMEOUT_S)
-        return cast(LinkReply, await call_service(self.ros, request["service"], request["service_type"], msg, timeout))
+        return await call_service(self.ros, request["service"], request["service_type"], msg, timeout)
 
     def _publish(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
         assert self.ros is not None

@@ -84,8 +84,7 @@ class Watches:
         assert link.loop is not None
         self.coalescer = Coalescer(self._send, loop=link.loop)
         link.listeners.append(self.offer)
-        task = supervise("link.topic-watch", self._sweep_forever)
-        link._tasks.append(task)
+        link._tasks.append(supervise("link.topic-watch", self._sweep_forever))
 
     # --- leases ----------------------------------------------------------------------
 
