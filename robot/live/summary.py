@@ -31,8 +31,7 @@ def summarise(value: Any, depth: int = 0) -> Any:
         return {k: summarise(v, depth + 1) for k, v in value.items()}
     if isinstance(value, np.ndarray):
         value = value.ravel()
-        head = value[:HEAD_ITEMS].tolist() if value.size > MAX_ITEMS else value.tolist()
-        return _array(len(value), head, depth) if value.size > MAX_ITEMS else head
+        return _array(len(value), value[:HEAD_ITEMS].tolist(), depth) if value.size > MAX_ITEMS else value.tolist()
     if isinstance(value, list | tuple):
         if depth >= MAX_DEPTH:
             return {TRUNCATED: "array", "length": len(value), "items": []}

@@ -38,10 +38,6 @@ class FrameWriter:
             return None
         return transport
 
-    @property
-    def open(self) -> bool:
-        return self._transport() is not None
-
     def backlog(self) -> int:
         """Bytes written but not yet accepted by the kernel (a slow reader, or a closed socket: -1)."""
         transport = self._transport()
