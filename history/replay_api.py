@@ -105,7 +105,7 @@ def incident_out(incident: Incident) -> dict[str, Any]:
     thumb = incident_thumbnail(incident)
     return {
         **model_to_dict(incident), "kind_label": incident.get_kind_display(),  # every field but the row's creation
-        "thumbnail": replay.frame_info(thumb)["url"] if thumb else None,  # type: ignore[index]
+        "thumbnail": replay.frame_url(thumb.pk) if thumb else None,
         "replay": f"{reverse('history:replay')}?incident={incident.pk}",
         "mcap": reverse("history-incident-mcap", args=[incident.pk]),
     }
