@@ -35,9 +35,6 @@ class Audio:
         self.playing: str | None = None
         self.done_count = 0
 
-    def duration(self, text: str) -> float:
-        return max(self.min_s, self.s_per_char * len(text))
-
     def say(self, text: str) -> None:
         self.queue.put_nowait(text)
 
@@ -59,7 +56,7 @@ class Audio:
         while True:
             text = await self.queue.get()
             self.speaking = text
-            await asyncio.sleep(self.duration(text))
+            await asyncio.sleep(max(self.min_s, self.s_per_char * len(text)))
             self.speaking = None
             self.done_count += 1
             self.spoken(text)

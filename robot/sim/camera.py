@@ -137,9 +137,7 @@ class VideoServer:
             lines = request.decode("latin-1").split("\r\n")
             method, target, _ = [*lines[0].split(" "), "", ""][:3]
             headers = {k.strip().lower(): v.strip() for k, _, v in (ln.partition(":") for ln in lines[1:] if ln)}
-            body = b""
-            if int(headers.get("content-length", "0") or 0) > 0:
-                body = await reader.readexactly(int(headers["content-length"]))
+            body = await reader.readexactly(max(0, int(headers.get("content-length") or 0)))
             url = urlsplit(target)
             await self._route(method, url.path, parse_qs(url.query), body, writer)
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, TimeoutError, ConnectionError,

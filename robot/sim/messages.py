@@ -12,6 +12,7 @@ from __future__ import annotations
 import base64
 import json
 import math
+import re
 import time
 from typing import Any
 
@@ -173,15 +174,8 @@ class ConversionError(Exception):
 
 def _parse(definition: str) -> list[tuple[str, str, int | None]]:
     """[(name, base type, array length)] where length is None (scalar), -1 (variable) or N."""
-    fields = []
-    for part in filter(None, (p.strip() for p in definition.split(";"))):
-        ftype, name = part.split()
-        length: int | None = None
-        if ftype.endswith("]"):
-            ftype, size = ftype[:-1].split("[")
-            length = int(size) if size else -1
-        fields.append((name, ftype, length))
-    return fields
+    return [(m["name"], m["type"], None if m["size"] is None else int(m["size"] or -1))
+            for m in re.finditer(r"(?P<type>[\w/]+)(?:\[(?P<size>\d*)\])?\s+(?P<name>\w+)", definition)]
 
 
 SCHEMAS: dict[str, list[tuple[str, str, int | None]]] = {k: _parse(v) for k, v in _DEFS.items()}
@@ -334,19 +328,15 @@ def typedefs(msg_type: str) -> list[dict[str, Any]]:
         if t not in seen and t in SCHEMAS:
             seen.append(t)
             todo[:0] = [ftype for _, ftype, _ in SCHEMAS[t] if ftype not in PRIMITIVES]
-    out = []
-    for t in seen:
-        schema = SCHEMAS[t]
-        out.append({
-            "type": t,
-            "fieldnames": [n for n, _, _ in schema],
-            "fieldtypes": [f for _, f, _ in schema],
-            "fieldarraylen": [-1 if ln is None else (0 if ln < 0 else ln) for _, _, ln in schema],
-            "examples": [json.dumps(_default_value(f, ln)) if f in PRIMITIVES else "{}" for _, f, ln in schema],
-            "constnames": [],
-            "constvalues": [],
-        })
-    return out
+    return [{
+        "type": t,
+        "fieldnames": [n for n, _, _ in SCHEMAS[t]],
+        "fieldtypes": [f for _, f, _ in SCHEMAS[t]],
+        "fieldarraylen": [-1 if ln is None else (0 if ln < 0 else ln) for _, _, ln in SCHEMAS[t]],
+        "examples": [json.dumps(_default_value(f, ln)) if f in PRIMITIVES else "{}" for _, f, ln in SCHEMAS[t]],
+        "constnames": [],
+        "constvalues": [],
+    } for t in seen]
 
 
 def _sanitize(value: Any) -> Any:

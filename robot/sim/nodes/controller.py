@@ -63,11 +63,10 @@ class ControllerNode(SimNode):
         self._on_state_change("", "", self.sm.state)
 
     def fire(self, event: str) -> bool:
-        before = self.sm.state
-        if not self.sm.fire(event):
-            self.bus.rosout(4, NODE, f"Event '{event}' is not a transition of state '{before}': ignored")
-            return False
-        return True
+        if self.sm.fire(event):
+            return True
+        self.bus.rosout(4, NODE, f"Event '{event}' is not a transition of state '{self.sm.state}': ignored")
+        return False
 
     def battery_low(self) -> bool:
         """The event scheduler on a low battery: "power_low" if the state machine takes it now."""

@@ -93,11 +93,10 @@ class CostmapNode(SimNode):
         self.bus.publish("footprint", {"header": messages.header(ri.MAP_FRAME), "polygon": {"points": points}})
 
     def _pub_local_plan(self) -> None:
-        active = self.navigating()
-        if not self.bus.wants("local_plan") or not (active or self._planned):
-            self._planned = active
-            return
+        active, was_active = self.navigating(), self._planned
         self._planned = active
+        if not self.bus.wants("local_plan") or not (active or was_active):
+            return
         b = self.body
         poses = local_plan(b.odom_x, b.odom_y, b.odom_yaw, b.v, b.w) if active else []
         self.bus.publish("local_plan", {"header": messages.header(ODOM_FRAME), "poses": [

@@ -52,14 +52,12 @@ class GraphNode(SimNode):
         found: set[str] = set()
         for node in self.nodes():
             if any(ri.topic(key).name == topic for key in node.publishes):
-                found.add(self._owner(topic) or (node.names[0] if node.names else "") or "")
+                found.add(self._owner(topic) or (node.names[0] if node.names else ""))
         if broker.publishers.get(topic):
             found.add(BRIDGE)
         if not found and topic not in broker.handlers:
-            owner = self._owner(topic)
-            if owner:
-                found.add(owner)
-        found.discard("")
+            found.add(self._owner(topic) or "")
+        found.discard("")  # no node to name
         return sorted(found)
 
     def subscribers(self, topic: str) -> list[str]:
