@@ -113,7 +113,7 @@ class Broker:
             lambda: collections.deque(maxlen=RECEIVED_KEEP))
         self.received_counts: collections.Counter[str] = collections.Counter()
         self.services: dict[str, tuple[str, ServiceHandler]] = {}
-        self.client_services: dict[str, tuple[Client, str]] = {}
+        self.client_services: dict[str, Client] = {}  # service -> the client that advertised it
         self.clients: dict[int, Client] = {}
         self.publishers: dict[str, set[int]] = collections.defaultdict(set)
         self.client_ids = itertools.count()
@@ -148,9 +148,6 @@ class Broker:
 
     # --- client side -----------------------------------------------------------------
 
-    def connect(self, client: Client) -> None:
-        self.clients[client.id] = client
-
     def unsubscribe(self, client_id: int, topic: str) -> None:
         """End a client's subscription to ``topic`` (every id it subscribed with)."""
         sub = self.subs[topic].pop(client_id, None)
@@ -165,7 +162,7 @@ class Broker:
             self.unsubscribe(client.id, topic)
         for pubs in self.publishers.values():
             pubs.discard(client.id)
-        self.client_services = {n: s for n, s in self.client_services.items() if s[0] is not client}
+        self.client_services = {n: c for n, c in self.client_services.items() if c is not client}
 
     def deliver(self, topic: str, msg: dict[str, Any], latch: bool) -> None:
         """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
@@ -311,10 +308,7 @@ class Client:
                        (False, "compression", str)])
         topic = frame["topic"]
         self.broker.types[topic] = self._topic_type(topic, frame.get("type"))
-        subs = self.broker.subs[topic]
-        sub = subs.get(self.id)
-        if sub is None:
-            sub = subs[self.id] = Subscription(self)
+        sub = self.broker.subs[topic].setdefault(self.id, Subscription(self))
         sub.params[mid] = (max(0, frame.get("throttle_rate", 0)), max(0, frame.get("queue_length", 0)))
         sub.update()
         latched = self.broker.latched_frame(topic)
@@ -340,9 +334,8 @@ class Client:
         _check(frame, [(True, "service", str), (False, "fragment_size", int), (False, "compression", str)])
         name = frame["service"]
         args = frame.get("args", {})
-        provider = self.broker.client_services.get(name)
-        if provider is not None:
-            owner, _ = provider
+        owner = self.broker.client_services.get(name)
+        if owner is not None:
             call_id = next(self.broker.call_ids)
             self.broker.pending_calls[call_id] = (self, mid, name)
             owner.reply({"op": "call_service", "id": call_id, "service": name, "args": args})
@@ -362,12 +355,11 @@ class Client:
 
     def op_advertise_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str), (True, "type", str)])
-        self.broker.client_services[frame["service"]] = (self, frame["type"])
+        self.broker.client_services[frame["service"]] = self
 
     def op_unadvertise_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str)])
-        owner = self.broker.client_services.get(frame["service"])
-        if owner and owner[0] is self:
+        if self.broker.client_services.get(frame["service"]) is self:
             del self.broker.client_services[frame["service"]]
 
     def op_service_response(self, frame: dict[str, Any], mid: Any) -> None:

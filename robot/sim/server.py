@@ -46,7 +46,7 @@ class RosbridgeServer:
         broker = self.robot.broker
         address = ws.remote_address[0] if ws.remote_address else ""
         client = Client(broker, ws.send, address)
-        broker.connect(client)
+        broker.clients[client.id] = client
         self.robot.client_connected()
         writer = asyncio.get_running_loop().create_task(self._write(client))
         try:

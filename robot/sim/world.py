@@ -60,9 +60,8 @@ class WorldMap:
         return int(self.grid[r, c]) != FREE
 
     def footprint_free(self, x: float, y: float, radius: float = ROBOT_RADIUS) -> bool:
-        if self.occupied(x, y):
-            return False
-        return not any(self.occupied(x + radius * cx, y + radius * sy) for cx, sy in _RING)
+        ring = ((x + radius * cx, y + radius * sy) for cx, sy in _RING)
+        return not self.occupied(x, y) and not any(self.occupied(px, py) for px, py in ring)
 
     def fan(self, body: Base, mount_x: float, fov: float, beams: int, max_range: float) -> list[tuple[float, float]]:
         """(angle from the heading, range) of ``beams`` rays spread over ``fov`` from a sensor
@@ -166,8 +165,7 @@ class Planner:
     def __init__(self, world: WorldMap) -> None:
         self.world = world
         # glassgarden: 0.1 m cells; large: 0.5 m cells, to keep the search small
-        self.factor = max(2, math.ceil(math.sqrt(world.width * world.height / 160_000)))
-        f = self.factor
+        f = max(2, math.ceil(math.sqrt(world.width * world.height / 160_000)))
         h, w = world.height // f, world.width // f
         blocks = world.grid[: h * f, : w * f].reshape(h, f, w, f)
         lethal = (blocks != FREE).any(axis=(1, 3))

@@ -116,15 +116,15 @@ class NavigationNode(SimNode):
     def _move_base_cancel(self, goal: Goal) -> None:
         self.navigator.stop(self.bus.clock.now())
         self._pub_plan(force=True)
+        self._finish_move_base(goal)
+
+    def _finish_move_base(self, goal: Goal, status: int | None = None, text: str = "") -> None:
+        """End a move_base goal (already ended if cancelled) and tell ``navigate``'s ``done`` how it ended."""
+        if status is not None:
+            self.move_base.finish(goal, status, text)
         done = goal.data.pop("done", None)
         if done is not None:
             done(goal.status)
-
-    def _finish_move_base(self, goal: Goal, status: int, text: str = "") -> None:
-        self.move_base.finish(goal, status, text)
-        done = goal.data.pop("done", None)
-        if done is not None:
-            done(status)
 
     def _navigation_goal(self, goal: Goal) -> None:
         order, name = goal.goal["order"], goal.goal["location_name"]
