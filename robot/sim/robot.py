@@ -102,8 +102,8 @@ class SimRobot:
         self.add(DiagnosticsNode(self.base_node))
         self.bridge = self.add(BridgeNode(self.rng))
         self.add(GraphNode(lambda: self.nodes))
-        self.server: RosbridgeServer | None = None
-        self.video: VideoServer | None = None
+        self.server = RosbridgeServer(self)  # both listen from start()
+        self.video = VideoServer(self)
 
     # --- lifecycle -------------------------------------------------------------------
 
@@ -124,10 +124,8 @@ class SimRobot:
             node.start(self.bus)
         # Encode the latched map now: a 4000 x 4000 map takes seconds, better before than mid-session.
         self.broker.latched_frame(ri.topic("map").name)
-        self.server = RosbridgeServer(self)
         await self.server.start(self.host, self.port)
         self.port = self.server.port
-        self.video = VideoServer(self)
         await self.video.start(self.host, self.video_port)
         self.video_port = self.video.port
         self.bus.spawn(self._tick_loop())
@@ -140,10 +138,8 @@ class SimRobot:
             t.cancel()
         for node in self.nodes:
             node.stop()
-        if self.video is not None:
-            await self.video.stop()
-        if self.server is not None:
-            await self.server.stop()
+        await self.video.stop()
+        await self.server.stop()
         await asyncio.gather(*tasks, return_exceptions=True)
         tasks.clear()
 
@@ -209,7 +205,7 @@ class SimRobot:
             "clients": len(broker.clients),
             "url": self.url,
             "video_port": self.video_port,
-            "video_streams": self.video.streams if self.video is not None else 0,
+            "video_streams": self.video.streams,
             "map": {"name": w.name, "width": w.width, "height": w.height,
                     "resolution": w.resolution, "origin": [w.origin_x, w.origin_y]},
             "state": {
