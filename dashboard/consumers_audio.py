@@ -71,15 +71,9 @@ class AudioConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
 
     async def audio_mic(self, event: dict[str, Any]) -> None:
         if self.session is not None:
-            await self.session.on_mic(event["data"])
+            await self.session.on_mic(event)
 
-    async def audio_format(self, event: dict[str, Any]) -> None:
-        if self.session is not None:
-            await self.session.on_mic_format(event["format"])
-
-    async def audio_problem(self, event: dict[str, Any]) -> None:
-        if self.session is not None:
-            await self.session.on_mic_problem(str(event["message"]))
+    audio_format = audio_problem = audio_mic
 
     async def audio_talk(self, event: TalkEvent) -> None:
         if self.session is not None:

@@ -42,15 +42,10 @@ async def _send(group: str, event: dict[str, Any]) -> None:
         await layer.group_send(group, event)
 
 
-@receiver(post_save, sender=get_user_model())
-def _saved(sender: type, instance: Any, created: bool, **kwargs: Any) -> None:
+@receiver([post_save, post_delete], sender=get_user_model())
+def _saved_or_deleted(sender: type, instance: Any, created: bool = False, **kwargs: Any) -> None:
     if not created:
         _tell(instance.pk)
-
-
-@receiver(post_delete, sender=get_user_model())
-def _deleted(sender: type, instance: Any, **kwargs: Any) -> None:
-    _tell(instance.pk)
 
 
 @receiver(m2m_changed, sender=get_user_model().groups.through)

@@ -186,11 +186,7 @@ _relays: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, VideoRelay] = weak
 
 
 def get_relay() -> VideoRelay:
-    loop = asyncio.get_running_loop()
-    relay = _relays.get(loop)
-    if relay is None:
-        relay = _relays[loop] = VideoRelay()
-    return relay
+    return _relays.setdefault(asyncio.get_running_loop(), VideoRelay())
 
 
 async def fetch_snapshot(base_url: str, params: dict[str, Any]) -> tuple[bytes, str]:

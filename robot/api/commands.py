@@ -28,8 +28,8 @@ CommandOut = inline_serializer("CommandResult", {
 })
 
 
-def _value_only(build: Callable[[Any], Command]) -> Callable[[Any, Any], Command]:
-    return lambda value, user: build(value)
+def _tool(action: str) -> Callable[[Any, Any], Command]:
+    return lambda value, user: tool.string_command(action, value)
 
 
 class FieldCommandView(CommandAPIView):
@@ -66,27 +66,27 @@ COMMAND_VIEWS = {view.action_name.replace("_", "-"): view for view in (
                     "sequence itself; with `robot` it publishes the mode on `robot_mode`. One change at a time (409).",
         input_field=serializers.ChoiceField(choices=MODE_NAMES)),
     _command_view(
-        "event", field="event", command=_value_only(tool.send_event), summary="Send event",
+        "event", field="event", command=_tool("event"), summary="Send event",
         description="Register a state machine event (see `available_events` in the robot state).",
         input_field=serializers.RegexField(r"^[A-Za-z0-9_]+$", max_length=EVENT_MAX)),
     _command_view(
-        "speech", field="text", command=_value_only(tool.say), summary="Speak",
+        "speech", field="text", command=_tool("speech"), summary="Speak",
         description="Text to speech (trimmed, 1-500 characters); requests queue on the robot.",
         input_field=serializers.CharField(max_length=SPEECH_MAX)),
     _command_view(
-        "emotion", field="emotion", command=_value_only(tool.set_emotion), summary="Set emotion",
+        "emotion", field="emotion", command=_tool("emotion"), summary="Set emotion",
         description="One of the emotion presets (managed in the admin).", input_field=serializers.CharField()),
     _command_view(
-        "emotion-system", field="on", command=_value_only(tool.set_emotion_system), summary="Emotion system",
+        "emotion-system", field="on", command=_tool("emotion_system"), summary="Emotion system",
         description="Switch the emotion system on or off.", input_field=serializers.BooleanField()),
     _command_view(
-        "motors", field="enabled", command=_value_only(motors.set_motors), summary="Motors",
+        "motors", field="enabled", command=lambda enabled, user: motors.set_motors(enabled), summary="Motors",
         description="Enable or disable the motors through the RosAria services; 502 carries the service's error.",
         input_field=serializers.BooleanField(), errors=(502,)),
     _command_view(
-        "playback", field="clip", command=_value_only(tool.play_clip), summary="Play sound",
+        "playback", field="clip", command=_tool("playback"), summary="Play sound",
         description="Play one of the sound clips (managed in the admin).", input_field=serializers.CharField()),
     _command_view(
-        "dome", field="mode", command=_value_only(tool.set_dome), summary="Dome mode",
+        "dome", field="mode", command=_tool("dome"), summary="Dome mode",
         description="Set the LED dome's visual mode (managed in the admin).", input_field=serializers.CharField()),
 )}

@@ -156,12 +156,6 @@ def refuse_bad_body(data: Any) -> None:
         raise exceptions.ValidationError({field: [reason]})
 
 
-def refuse_bad_form(data: Any) -> None:
-    for name, values in data.lists():
-        for value in values:
-            refuse_bad_body({name: value})
-
-
 class BoundedJSONParser(JSONParser):
     """DRF's JSON parser, refusing (400) deep nesting instead of recursing to death, and text
     the site's text policy never accepts, naming where it is."""
@@ -175,20 +169,23 @@ class BoundedJSONParser(JSONParser):
         return data
 
 
-class PolicyFormParser(FormParser):
-    """Form bodies under the same text policy as JSON ones."""
+class _FormPolicy:
+    """Form bodies (plain or multipart) under the same text policy as JSON ones."""
 
     def parse(self, stream: Any, media_type: str | None = None, parser_context: Any = None) -> Any:
-        data = super().parse(stream, media_type, parser_context)
-        refuse_bad_form(data)
-        return data
-
-
-class PolicyMultiPartParser(MultiPartParser):
-    def parse(self, stream: Any, media_type: str | None = None, parser_context: Any = None) -> Any:
-        parsed = super().parse(stream, media_type, parser_context)
-        refuse_bad_form(parsed.data)
+        parsed = super().parse(stream, media_type, parser_context)  # type: ignore[misc]
+        for name, values in getattr(parsed, "data", parsed).lists():
+            for value in values:
+                refuse_bad_body({name: value})
         return parsed
+
+
+class PolicyFormParser(_FormPolicy, FormParser):
+    pass
+
+
+class PolicyMultiPartParser(_FormPolicy, MultiPartParser):
+    pass
 
 
 class SafeJSONRenderer(JSONRenderer):

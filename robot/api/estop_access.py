@@ -58,15 +58,16 @@ def _pass_for(user: Any) -> dict[str, Any]:
     return {"u": user.pk, "n": user.get_username(), "h": _fingerprint(user)}
 
 
-def pass_user(request: HttpRequest) -> PassUser | None:
-    raw = request.COOKIES.get(COOKIE)
-    if not raw:
-        return None
+def _read_pass(raw: str | None) -> dict[str, Any] | None:
     try:
-        data = signing.loads(raw, salt=_SALT, max_age=settings.SESSION_COOKIE_AGE)
+        return signing.loads(raw or "", salt=_SALT, max_age=settings.SESSION_COOKIE_AGE)
     except signing.BadSignature:
         return None
-    return PassUser(pk=int(data["u"]), username=str(data["n"]))
+
+
+def pass_user(request: HttpRequest) -> PassUser | None:
+    data = _read_pass(request.COOKIES.get(COOKIE))
+    return PassUser(pk=int(data["u"]), username=str(data["n"])) if data else None
 
 
 class EstopPassMiddleware:
@@ -83,22 +84,14 @@ class EstopPassMiddleware:
             return response
         current = request.COOKIES.get(COOKIE)
         if user.is_authenticated and roles_cached(user) and is_operator(user):
-            held = pass_user(request) if current else None
-            if held is None or held.pk != user.pk or _stale(current, user):
+            wanted = _pass_for(user)
+            if _read_pass(current) != wanted:  # none yet, expired, someone else's, or an old name or password
                 response.set_cookie(
-                    COOKIE, signing.dumps(_pass_for(user), salt=_SALT), max_age=settings.SESSION_COOKIE_AGE,
+                    COOKIE, signing.dumps(wanted, salt=_SALT), max_age=settings.SESSION_COOKIE_AGE,
                     secure=settings.SESSION_COOKIE_SECURE, httponly=True, samesite="Lax")
         elif current and (not user.is_authenticated or roles_cached(user)):
             response.delete_cookie(COOKIE, samesite="Lax")
         return response
-
-
-def _stale(raw: str | None, user: Any) -> bool:
-    try:
-        data = signing.loads(raw or "", salt=_SALT)
-    except signing.BadSignature:
-        return True
-    return bool(data.get("h") != _fingerprint(user) or data.get("n") != user.get_username())
 
 
 class EstopAccessMixin:

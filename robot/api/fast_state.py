@@ -139,14 +139,11 @@ class FastStateApp:
         if not json_accepted(accept) or trusted_token_user(authorization) is None:
             return None
         check = (scope.get("scheme"), tuple(scope.get("server") or ()), tuple(checked))
-        try:
-            return self._checked[check]
-        except KeyError:
-            pass
-        if len(self._checked) >= _CHECKS_KEPT:  # hosts that vary per request (hostile ones) only cost a check
-            self._checked.clear()
-        headers = self._checked[check] = self._check(scope)
-        return headers
+        if check not in self._checked:
+            if len(self._checked) >= _CHECKS_KEPT:  # hosts that vary per request (hostile ones) only cost a check
+                self._checked.clear()
+            self._checked[check] = self._check(scope)
+        return self._checked[check]
 
     def _check(self, scope: dict[str, Any]) -> tuple[Headers, Headers] | None:
         request = self._site.request(scope)

@@ -47,15 +47,11 @@ class DecodeError(ValueError):
     """Microphone audio did not decode."""
 
 
-def _coding(info: dict[str, Any]) -> str:
-    return str(info.get("coding_format") or "wave").lower()
-
-
 def playback_format(info: dict[str, Any] | None) -> dict[str, Any]:
     """What listening pages receive for a microphone that declares ``info``: always S16LE
     ("wave"), with the robot's own coding in ``robot_coding_format``. Raises Unplayable."""
     info = info or DEFAULT_INFO
-    coding = _coding(info)
+    coding = str(info.get("coding_format") or "wave").lower()
     if coding not in CODINGS:
         raise Unplayable(f"The robot's microphone sends {coding}; this station plays wave (raw PCM) and mp3.")
     sample_format = str(info.get("sample_format") or "S16LE").upper()

@@ -167,17 +167,16 @@ class AudioSession:
         if reason != "disconnect":
             await self.send_json({"type": "listening", "on": False})
 
-    async def on_mic(self, data: bytes) -> None:
-        if self.listening_since is not None:
-            await self.send_bytes(data)
-
-    async def on_mic_format(self, fmt: dict[str, Any]) -> None:
-        if self.listening_since is not None:
-            await self.send_json({"type": "format", **fmt})
-
-    async def on_mic_problem(self, message: str) -> None:
-        if self.listening_since is not None:
-            await self.error(message, "mic")
+    async def on_mic(self, event: dict[str, Any]) -> None:
+        """What the microphone group hears (``robot.link.audio``), passed on while listening."""
+        if self.listening_since is None:
+            return
+        if event["type"] == "audio.mic":
+            await self.send_bytes(event["data"])
+        elif event["type"] == "audio.format":
+            await self.send_json({"type": "format", **event["format"]})
+        else:
+            await self.error(str(event["message"]), "mic")
 
     # --- talking -----------------------------------------------------------------------
 

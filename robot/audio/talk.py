@@ -7,6 +7,7 @@ it within seconds. Every change is announced to every audio socket through one g
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any, Literal, TypedDict
 
 from channels.layers import get_channel_layer
@@ -23,20 +24,12 @@ class TalkEvent(TypedDict):
     reason: str  # start | stop | quiet | disconnect | estop | offline | refused
 
 
-_lock: HeldLock | None = None
-
-
+@cache
 def get_talk_lock() -> HeldLock:
-    global _lock
-    if _lock is None:
-        _lock = held_lock("talk-lock", settings.AUDIO_TALK_LOCK_TTL_S)
-    return _lock
+    return held_lock("talk-lock", settings.AUDIO_TALK_LOCK_TTL_S)
 
 
-def reset_talk_lock() -> None:
-    """Forget the configured lock (tests that change settings)."""
-    global _lock
-    _lock = None
+reset_talk_lock = get_talk_lock.cache_clear  # forget the configured lock (tests that change settings)
 
 
 async def announce_talker(holder: Holder | None, reason: str) -> None:

@@ -179,8 +179,5 @@ async def arun_command(
     refusal: str = FORBIDDEN,
 ) -> str:
     """Run ``run`` for ``user`` if allowed; audit the outcome; return a human-readable result."""
-
-    async def send(_: Any) -> str | None:
-        return await run()
-
-    return await arun(Command(action, params, send, allowed=allowed, refusal=refusal), user=user, source=source)
+    command = Command(action, params, lambda _: run(), allowed=allowed, refusal=refusal)
+    return await arun(command, user=user, source=source)

@@ -80,18 +80,10 @@ def _quote(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ") + '"'
 
 
-@dataclass
-class _Ids:
-    nodes: dict[str, str]
-    clusters: dict[str, str]
-
-    def node(self, path: str) -> str:
-        return self.nodes.setdefault(path, f"n{len(self.nodes)}")
-
-
 def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
     """Everything the page needs to draw the machine: DOT text, node and edge tables, a version."""
-    ids = _Ids({}, {p: f"cluster_{i}" for i, p in enumerate(sorted(containers))})
+    node_ids: dict[str, str] = {}
+    clusters = {p: f"cluster_{i}" for i, p in enumerate(sorted(containers))}
     nodes: list[dict[str, Any]] = []
     edges: list[dict[str, Any]] = []
     # Left to right: the many sibling states stack down the page rather than across it, a shape
@@ -104,7 +96,7 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
     flat = top[0] if len(top) == 1 else None
 
     def add_node(path: str, name: str, kind: str, container: str, indent: str) -> None:
-        node_id = ids.node(path)
+        node_id = node_ids.setdefault(path, f"n{len(node_ids)}")
         nodes.append({"id": node_id, "path": path, "name": name, "kind": kind, "container": container})
         shape = ' shape=ellipse, style="filled", fillcolor="#eef1f4", fontsize=9,' if kind == "outcome" else ""
         lines.append(f"{indent}{node_id} [id={_quote(node_id)},{shape} label={_quote(name)}];")
@@ -114,7 +106,7 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
         indent = "  " * depth
         boxed = path != flat
         if boxed:
-            lines.append(f'{indent}subgraph {ids.clusters[path]} {{ id={_quote(ids.clusters[path])}; '
+            lines.append(f'{indent}subgraph {clusters[path]} {{ id={_quote(clusters[path])}; '
                          f'label={_quote(c.name)}; style="rounded"; color="#8a96a3";')
         for child in c.children:
             child_path = f"{path}/{child}"
@@ -134,26 +126,22 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
         for child, outcome, target in c.edges:
             tail_path, head_path = f"{path}/{child}", _target(containers, c, target)
             attrs = [f"label={_quote(outcome)}"]
+            tail, head = tail_path, head_path
             if tail_path in containers:
-                own = containers[tail_path]
-                if outcome in own.outcomes:
+                if outcome in containers[tail_path].outcomes:
                     tail = outcome_node(tail_path, outcome)
                 else:
                     tail = first_state(containers, tail_path)
-                    attrs.append(f"ltail={ids.clusters[tail_path]}")
-            else:
-                tail = tail_path
+                    attrs.append(f"ltail={clusters[tail_path]}")
             if head_path in containers:
                 head = first_state(containers, head_path)
-                attrs.append(f"lhead={ids.clusters[head_path]}")
-            else:
-                head = head_path
+                attrs.append(f"lhead={clusters[head_path]}")
             for end in (tail, head):
-                if end not in ids.nodes:  # named by an edge only (the robot left it out of children)
+                if end not in node_ids:  # named by an edge only (the robot left it out of children)
                     add_node(end, end.rsplit("/", 1)[-1], "state", parent_of(end), "")
             edge_id = f"e{len(edges)}"
             edges.append({"id": edge_id, "container": path, "from": tail_path, "event": outcome, "to": head_path})
-            lines.append(f"{ids.node(tail)} -> {ids.node(head)} [id={_quote(edge_id)}, {', '.join(attrs)}];")
+            lines.append(f"{node_ids[tail]} -> {node_ids[head]} [id={_quote(edge_id)}, {', '.join(attrs)}];")
     lines.append("}")
     dot = "\n".join(lines)
     described = json.dumps([[c.path, c.children, c.edges, c.outcomes] for _, c in sorted(containers.items())])
@@ -162,7 +150,7 @@ def graph_view(containers: Mapping[str, Container]) -> dict[str, Any]:
         "containers": sorted(containers),
         "nodes": nodes,
         "edges": edges,
-        "clusters": {ids.clusters[p]: p for p in sorted(containers)},
+        "clusters": {clusters[p]: p for p in sorted(containers)},
         "dot": dot,
     }
 

@@ -41,11 +41,8 @@ class SmachTracker:
         self._structure, self._status = ri.topic("smach_structure").name, ri.topic("smach_status").name
         self._change = ri.topic("state_change").name
 
-    def wants(self, name: str) -> bool:
-        return name in (self._structure, self._status, self._change)
-
     def feed(self, name: str, msg: dict[str, Any], t: float) -> bool:
-        """Take one message; True if it may change what the page shows."""
+        """Take one message the link received; True if it may change what the page shows."""
         try:
             if name == self._structure:
                 container = smach.container_from_message(msg)
@@ -75,7 +72,7 @@ class SmachTracker:
 
 def _listen(link: RobotLink, tracker: Any, wake: asyncio.Event) -> Any:
     def listener(name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
-        if tracker.wants(name) and tracker.feed(name, msg, t):
+        if tracker.feed(name, msg, t):
             wake.set()
 
     link.listeners.append(listener)
@@ -119,11 +116,8 @@ class DiagnosticsTracker:
         self.levels_changed = False
         self._name = ri.topic("diagnostics").name
 
-    def wants(self, name: str) -> bool:
-        return name == self._name
-
     def feed(self, name: str, msg: dict[str, Any], t: float) -> bool:
-        new = diag.components_from_message(msg, t)
+        new = diag.components_from_message(msg, t) if name == self._name else None
         if not new:
             return False
         merged = diag.merge(self.components, new, now=t)

@@ -111,10 +111,6 @@ def palette_png(cells: np.ndarray, palette: list[int], **options: Any) -> bytes:
     return out.getvalue()
 
 
-def encode_png(grid: np.ndarray) -> bytes:
-    return palette_png(np.flipud(grid), PALETTE, compress_level=3)
-
-
 def write_atomically(path: Path, write: Callable[[BinaryIO], object]) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
@@ -133,7 +129,7 @@ def render_map(msg: dict[str, Any], directory: Path) -> RenderedMap:
     if not cached:
         directory.mkdir(parents=True, exist_ok=True)
         write_atomically(grid_path(directory, version), lambda f: np.save(f, grid, allow_pickle=False))
-        data = encode_png(grid)
+        data = palette_png(np.flipud(grid), PALETTE, compress_level=3)
         write_atomically(png, lambda f: f.write(data))
         _prune(directory, keep=version)
     t2 = time.perf_counter()

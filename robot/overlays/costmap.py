@@ -54,11 +54,6 @@ def _palette() -> tuple[list[int], bytes]:
 PALETTE, ALPHA = _palette()
 
 
-def encode_tile(cells: np.ndarray) -> bytes:
-    """One tile (rows top-down, values -1..100) as a palette PNG with per-value transparency."""
-    return palette_png(cells, PALETTE, compress_level=1, transparency=ALPHA)
-
-
 class UpdateError(ValueError):
     pass
 
@@ -131,7 +126,7 @@ class Costmap:
 
     def _render(self, row: int, col: int) -> None:
         cells = self.image[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE]
-        data = encode_tile(cells)
+        data = palette_png(cells, PALETTE, compress_level=1, transparency=ALPHA)  # transparent per value
         write_atomically(self.tile_path(row, col), lambda f: f.write(data))
 
     def _forget(self, path: Path) -> None:
@@ -159,4 +154,4 @@ class Costmap:
         }
 
 
-__all__ = ["LAYERS", "TILE", "Costmap", "MapError", "UpdateError", "costmap_dir", "encode_tile", "is_tile_name"]
+__all__ = ["LAYERS", "TILE", "Costmap", "MapError", "UpdateError", "costmap_dir", "is_tile_name"]

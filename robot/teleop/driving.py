@@ -35,7 +35,7 @@ async def announce(holder: Holder | None, reason: str) -> None:
     await get_channel_layer().group_send(LOCK_GROUP, event)
 
 
-async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock: HeldLock | None = None) -> Holder:
+async def lock_acquire(*, user: Any, me: Holder, lock: HeldLock | None = None) -> None:
     """Take the free lock for ``me``; Busy if another connection drives."""
     lock = lock or get_lock()
 
@@ -47,11 +47,10 @@ async def lock_acquire(*, user: Any, me: Holder, source: str = "websocket", lock
         await announce(me, "acquire")
         return "drive lock taken"
 
-    await arun_command(user=user, source=source, action="teleop.lock", params={}, run=run)
-    return me
+    await arun_command(user=user, source="websocket", action="teleop.lock", params={}, run=run)
 
 
-async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", lock: HeldLock | None = None) -> Holder:
+async def lock_takeover(*, user: Any, me: Holder, lock: HeldLock | None = None) -> None:
     """An admin takes the lock from whoever holds it; the robot is stopped first."""
     lock = lock or get_lock()
     previous: Holder | None = None
@@ -69,9 +68,8 @@ async def lock_takeover(*, user: Any, me: Holder, source: str = "websocket", loc
             return f"took the drive lock from {previous.username}; zero velocity not sent: {exc.message}"
         return f"took the drive lock from {previous.username}"
 
-    await arun_command(user=user, source=source, action="teleop.takeover", params={}, run=run, allowed=is_admin,
+    await arun_command(user=user, source="websocket", action="teleop.takeover", params={}, run=run, allowed=is_admin,
                        refusal="Only admins may take over the drive lock.")
-    return me
 
 
 async def _give_back_if_latched(lock: HeldLock, me: Holder) -> None:
@@ -83,17 +81,14 @@ async def _give_back_if_latched(lock: HeldLock, me: Holder) -> None:
         raise
 
 
-async def lock_release(*, user: Any, me: Holder, reason: str, source: str = "websocket",
-                       lock: HeldLock | None = None) -> bool:
+async def lock_release(*, user: Any, me: Holder, reason: str, lock: HeldLock | None = None) -> bool:
     """Give up the lock if ``me`` holds it (unlock, disconnect); True if it was held."""
     lock = lock or get_lock()
     if not await lock.release(me):
         return False
     await announce(None, reason)
-    await database_sync_to_async(audit_record)(
-        user=user, source=source, action="teleop.unlock", params={"reason": reason}, ok=True,
-        outcome=f"drive lock freed ({reason})",
-    )
+    await teleop_record(user=user, action="teleop.unlock", params={"reason": reason},
+                        outcome=f"drive lock freed ({reason})")
     return True
 
 

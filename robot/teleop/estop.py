@@ -88,11 +88,6 @@ async def _disable_motors(by: str) -> str:
     return "motors disabled"
 
 
-async def _mode_stop(by: str) -> str:
-    # The raw mode change: an e-stop is never refused because a mode change is under way.
-    return await perform_stop(requested_by=by)
-
-
 Step = Callable[[str], Awaitable[str]]
 STEPS: tuple[tuple[str, Step], ...] = (
     ("zero_velocity", _zero_velocity),
@@ -100,7 +95,8 @@ STEPS: tuple[tuple[str, Step], ...] = (
     ("talk", end_all_talk),
     ("cancel_navigation", _cancel_navigation),
     ("disable_motors", _disable_motors),
-    ("mode_stop", _mode_stop),
+    # The raw mode change: an e-stop is never refused because a mode change is under way.
+    ("mode_stop", lambda by: perform_stop(requested_by=by)),
 )
 
 

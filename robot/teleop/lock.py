@@ -7,21 +7,16 @@ walks away, or a web process that dies, frees it.
 
 from __future__ import annotations
 
+from functools import cache
+
 from django.conf import settings
 
 from robot.live.locks import HeldLock, held_lock
 
-_lock: HeldLock | None = None
 
-
+@cache
 def get_lock() -> HeldLock:
-    global _lock
-    if _lock is None:
-        _lock = held_lock("teleop-lock", settings.TELEOP_LOCK_TTL_S)
-    return _lock
+    return held_lock("teleop-lock", settings.TELEOP_LOCK_TTL_S)
 
 
-def reset_lock() -> None:
-    """Forget the configured lock (tests that change settings)."""
-    global _lock
-    _lock = None
+reset_lock = get_lock.cache_clear  # forget the configured lock (tests that change settings)
