@@ -50,14 +50,6 @@ class PassUser:
         return self.username
 
 
-def _fingerprint(user: Any) -> str:
-    return user.get_session_auth_hash()[:16]
-
-
-def _pass_for(user: Any) -> dict[str, Any]:
-    return {"u": user.pk, "n": user.get_username(), "h": _fingerprint(user)}
-
-
 def _read_pass(raw: str | None) -> dict[str, Any] | None:
     try:
         return signing.loads(raw or "", salt=_SALT, max_age=settings.SESSION_COOKIE_AGE)
@@ -84,7 +76,7 @@ class EstopPassMiddleware:
             return response
         current = request.COOKIES.get(COOKIE)
         if user.is_authenticated and roles_cached(user) and is_operator(user):
-            wanted = _pass_for(user)
+            wanted = {"u": user.pk, "n": user.get_username(), "h": user.get_session_auth_hash()[:16]}
             if _read_pass(current) != wanted:  # none yet, expired, someone else's, or an old name or password
                 response.set_cookie(
                     COOKIE, signing.dumps(wanted, salt=_SALT), max_age=settings.SESSION_COOKIE_AGE,

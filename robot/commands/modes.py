@@ -184,12 +184,12 @@ async def perform_stop(*, requested_by: str = "") -> str:
     """Mode stop for the E-STOP. A mode change under way may have sent its last event just before
     the latch (the link refuses the ones after), and the robot's answer to it can land after this
     walk reached suspension: once that change has ended, walk again from where the robot is."""
-    under_way = await change_under_way()
+    under_way = await locks.is_taken(LOCK)
     outcome = await perform_mode(ri.Mode.STOP, requested_by=requested_by)
     if not under_way:
         return outcome
     deadline = asyncio.get_running_loop().time() + STEP_TIMEOUT_S
-    while await change_under_way() and asyncio.get_running_loop().time() < deadline:
+    while await locks.is_taken(LOCK) and asyncio.get_running_loop().time() < deadline:
         await asyncio.sleep(0.02)
     return await perform_mode(ri.Mode.STOP, requested_by=requested_by)
 
@@ -223,10 +223,6 @@ async def announce_request(mode: ri.Mode, *, by: str, status: str, error: str = 
 # --- serialisation -----------------------------------------------------------------------
 
 LOCK = "mode-change-lock"
-
-
-async def change_under_way() -> bool:
-    return await locks.is_taken(LOCK)
 
 
 @asynccontextmanager
