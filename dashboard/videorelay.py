@@ -26,6 +26,7 @@ log = logging.getLogger(__name__)
 CONNECT_TIMEOUT_S = 3.0
 # A stream that sends nothing for this long is dead; the page reconnects.
 READ_TIMEOUT_S = 10.0
+TIMEOUT = aiohttp.ClientTimeout(total=None, sock_connect=CONNECT_TIMEOUT_S, sock_read=READ_TIMEOUT_S)
 MAX_FRAME_BYTES = 10 * 1024 * 1024
 BOUNDARY = "boundarydonotcross"
 CONTENT_TYPE = f"multipart/x-mixed-replace;boundary={BOUNDARY}"
@@ -35,10 +36,6 @@ StreamKey = tuple[tuple[str, str], ...]  # the upstream's query parameters, sort
 
 class UpstreamError(Exception):
     pass
-
-
-def _timeout() -> aiohttp.ClientTimeout:
-    return aiohttp.ClientTimeout(total=None, sock_connect=CONNECT_TIMEOUT_S, sock_read=READ_TIMEOUT_S)
 
 
 def encode_part(jpeg: bytes, headers: dict[str, str]) -> bytes:
@@ -89,7 +86,7 @@ class Upstream:
 
     async def _run(self) -> None:
         try:
-            async with aiohttp.ClientSession(timeout=_timeout()) as session:
+            async with aiohttp.ClientSession(timeout=TIMEOUT) as session:
                 async with session.get(f"{self.base_url}/stream", params=list(self.params)) as response:
                     if response.status != 200 or not response.content_type.startswith("multipart/"):
                         raise UpstreamError(f"video server answered {response.status} {response.content_type}")
@@ -193,7 +190,7 @@ async def fetch_snapshot(base_url: str, params: dict[str, Any]) -> tuple[bytes, 
     """One JPEG (body, content type); UpstreamError when the video server is down or the reply is bad."""
     query = [(k, str(v)) for k, v in params.items()]
     try:
-        async with aiohttp.ClientSession(timeout=_timeout()) as session:
+        async with aiohttp.ClientSession(timeout=TIMEOUT) as session:
             async with session.get(f"{base_url.rstrip('/')}/snapshot", params=query) as response:
                 if response.status != 200:
                     raise UpstreamError(f"video server answered {response.status}")
