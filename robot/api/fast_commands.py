@@ -34,7 +34,7 @@ from rest_framework.request import Request
 from cyborg_site.roles import roles_cached
 from robot.api.commands import FieldCommandView
 from robot.api.errors import BoundedJSONParser, SafeJSONRenderer, api_exception_handler, api_server_error
-from robot.api.fast_state import SiteChecks, json_accepted, renew_token_trust, trusted_token_user
+from robot.api.fast_state import SiteChecks, json_accepted, token_user
 from robot.api.validation import body_dict, reject_unknown
 from robot.commands.pipeline import Command, arun
 
@@ -77,9 +77,8 @@ class FastCommandApp:
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["method"] == "POST" and scope["path"].startswith("/api/robot/"):
-            if command_view(scope["path"]) is not None:  # (never the E-STOP: it must not wait on the database)
-                await renew_token_trust(_headers(scope).get(b"authorization", b""))
-            caller = self.eligible(scope)
+            view = command_view(scope["path"])  # (never the E-STOP: it must not wait on the database)
+            caller = None if view is None else await self.eligible(scope, view)
             if caller is not None:
                 body, more = await _read(receive, caller[3])
                 if body is None:
@@ -92,19 +91,17 @@ class FastCommandApp:
                 receive = _replay(body, more, receive)
         await self.app(scope, receive, send)
 
-    def eligible(self, scope: dict[str, Any]) -> tuple[type[FieldCommandView], Any, ASGIRequest, int] | None:
+    async def eligible(self, scope: dict[str, Any], view: type[FieldCommandView],
+                       ) -> tuple[type[FieldCommandView], Any, ASGIRequest, int] | None:
         """(view, user, request, body length) when this app may answer, judged on the headers alone."""
         if scope.get("query_string") or scope.get("root_path"):
-            return None
-        view = command_view(scope["path"])
-        if view is None:
             return None
         headers = _headers(scope)
         content_type = headers.get(b"content-type", b"").strip().lower()
         length = _declared_length(headers.get(b"content-length"))
         if content_type != b"application/json" or length is None or not json_accepted(headers.get(b"accept", b"")):
             return None
-        user = trusted_token_user(headers.get(b"authorization", b""))
+        user = await token_user(headers.get(b"authorization", b""))
         if user is None or not roles_cached(user):
             return None
         request = self._site.request(scope)

@@ -81,17 +81,15 @@ def _token_key(authorization: bytes) -> str | None:
     return key.strip() if scheme.lower() == "token" else None
 
 
-def trusted_token_user(authorization: bytes) -> Any:
-    """The user of an ``Authorization: Token`` header the token cache trusts, else None."""
+async def token_user(authorization: bytes) -> Any:
+    """The user of an ``Authorization: Token`` header the token cache trusts, else None; a known token
+    whose trust ran out is renewed first (one query, shared by the requests that wait for it). The
+    user it answers is the one to judge by: on a busy loop the renewed trust may run out again before
+    the next look."""
     key = _token_key(authorization)
-    return CachedTokenAuthentication.cached_user(key) if key is not None else None
-
-
-async def renew_token_trust(authorization: bytes) -> None:
-    """Before a fast path judges a caller: a known token whose trust ran out is renewed (one query)."""
-    key = _token_key(authorization)
-    if key is not None and CachedTokenAuthentication.cached_user(key) is None:
-        await CachedTokenAuthentication.arenew(key)
+    if key is None:
+        return None
+    return CachedTokenAuthentication.cached_user(key) or await CachedTokenAuthentication.arenew(key)
 
 
 class FastStateApp:
@@ -110,8 +108,7 @@ class FastStateApp:
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         if scope["type"] == "http" and scope["path"] == STATE_PATH and scope["method"] == "GET":
-            await renew_token_trust(dict(scope["headers"]).get(b"authorization", b""))
-            headers = self.response_headers(scope)
+            headers = await self.response_headers(scope)
             if headers is not None:
                 body = self._renderer.render(await arobot_state())
                 before, after = headers
@@ -121,7 +118,7 @@ class FastStateApp:
                 return
         await self.django_app(scope, receive, send)
 
-    def response_headers(self, scope: dict[str, Any]) -> tuple[Headers, Headers] | None:
+    async def response_headers(self, scope: dict[str, Any]) -> tuple[Headers, Headers] | None:
         """The answer's headers before and after Content-Length, or None when Django must answer
         (unknown token, other formats, bad host, an HTTPS redirect…)."""
         if scope.get("query_string") or scope.get("root_path"):
@@ -136,7 +133,7 @@ class FastStateApp:
                 accept = value
             elif name in _CHECKED_HEADERS or name == proxy_ssl_header:
                 checked.append((name, value))
-        if not json_accepted(accept) or trusted_token_user(authorization) is None:
+        if not json_accepted(accept) or await token_user(authorization) is None:
             return None
         check = (scope.get("scheme"), tuple(scope.get("server") or ()), tuple(checked))
         if check not in self._checked:

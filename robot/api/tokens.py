@@ -19,6 +19,8 @@ from rest_framework.authentication import TokenAuthentication
 from rest_framework.authtoken.models import Token
 from rest_framework.exceptions import AuthenticationFailed
 
+from cyborg_site.roles import role_of
+
 # A valid token is trusted this long without asking the database again (per process): a deleted
 # token, an expired one or a deactivated or demoted user stops working within this time in every
 # web process (at once in the process that made the change), at one query per token per period.
@@ -85,7 +87,9 @@ class CachedTokenAuthentication(TokenAuthentication):
     @classmethod
     def _renew(cls, key: str) -> Any:
         try:
-            return cls().authenticate_credentials(key)[0]
+            user = cls().authenticate_credentials(key)[0]
+            role_of(user)  # its roles read here too, so the fast command path can judge without a query
+            return user
         except AuthenticationFailed:
             cls._cache.pop(key, None)
             return None

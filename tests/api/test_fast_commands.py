@@ -2,6 +2,7 @@
 for every outcome the same status, body, headers and audit row as the DRF view gives, and
 everything the fast path does not serve still goes to Django."""
 
+import asyncio
 import json
 import re
 
@@ -44,6 +45,11 @@ async def trusted(user) -> str:
     return key
 
 
+async def passed_on(self, scope, view) -> None:
+    """FastCommandApp.eligible when every request must take Django's way."""
+    return None
+
+
 def answer(response: dict) -> tuple[int, dict, dict[bytes, bytes]]:
     headers = {name.lower(): value for name, value in response["headers"]}
     headers.pop(b"content-length")  # follows the body, compared with it
@@ -60,7 +66,7 @@ async def both_ways(monkeypatch, django_calls, key: str, path: str, body: bytes 
     """The same request through Django, then on the fast path: equal answers and audit rows."""
     count = await AuditEntry.objects.acount()
     with monkeypatch.context() as forced:
-        forced.setattr(fast_commands.FastCommandApp, "eligible", lambda self, scope: None)
+        forced.setattr(fast_commands.FastCommandApp, "eligible", passed_on)
         through_django = await post(key, path, body)
     entry_django, written = await last_entry(), await AuditEntry.objects.acount() - count
     calls = len(django_calls)
@@ -130,7 +136,7 @@ async def test_it_throttles_as_the_view_does(operator, monkeypatch, django_calls
     settings.COMMAND_THROTTLE_RATE = "3/min"
     assert (await both_ways(monkeypatch, django_calls, key, SPEECH, b"{nope"))["status"] == 400
     with monkeypatch.context() as forced:
-        forced.setattr(fast_commands.FastCommandApp, "eligible", lambda self, scope: None)
+        forced.setattr(fast_commands.FastCommandApp, "eligible", passed_on)
         through_django = await post(key, SPEECH, {"text": "one too many"})
     fast = await post(key, SPEECH, {"text": "one too many"})  # throttled before its body counts
     seconds = re.compile(rb"\d+")
@@ -160,6 +166,17 @@ async def test_an_uncached_token_or_user_goes_to_django(operator, django_calls):
     await post(key, body=b"{nope")  # a 400 through Django: the token is cached, the roles not read
     await post(key, body=b"{nope")
     assert django_calls == [SPEECH, SPEECH]
+
+
+async def test_a_trust_renewed_for_a_request_serves_it_however_soon_it_runs_out(operator, monkeypatch, django_calls):
+    from robot.api import tokens
+
+    key = await trusted(operator)
+    await asyncio.sleep(tokens.TOKEN_CACHE_S + 0.1)  # the trust the first request gave has run out
+    monkeypatch.setattr(tokens, "TOKEN_CACHE_S", 0.0)  # each renewal runs out at once: a loop stalled past it
+    django_calls.clear()
+    through_fast = await post(key, SPEECH, {"text": "renewed"})
+    assert django_calls == [] and through_fast["status"] in (200, 503)
 
 
 async def test_an_unexpected_failure_answers_500_as_the_view_does(operator, monkeypatch, django_calls):

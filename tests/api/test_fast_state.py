@@ -52,6 +52,19 @@ async def test_a_trusted_token_is_answered_without_django_with_the_views_answer(
     assert dict(second["headers"])[b"X-Frame-Options"] == b"DENY"
 
 
+async def test_a_trust_renewed_for_a_request_serves_it_however_soon_it_runs_out(viewer, monkeypatch, django_calls):
+    from asgiref.sync import sync_to_async
+
+    from robot.api import tokens
+
+    headers = await sync_to_async(token_for)(viewer)
+    await get(headers)  # Django checks the token and caches it
+    await asyncio.sleep(tokens.TOKEN_CACHE_S + 0.1)  # the trust the first request gave has run out
+    monkeypatch.setattr(tokens, "TOKEN_CACHE_S", 0.0)  # each renewal runs out at once: a loop stalled past it
+    assert (await get(headers))["status"] == 200
+    assert django_calls == [PATH]
+
+
 async def test_a_deleted_token_is_refused_at_once_in_the_apis_error_shape(viewer, django_calls):
     from asgiref.sync import sync_to_async
 
