@@ -7,6 +7,9 @@
   "not responding" (worst of several freezes).
 - ``alert_to_email_ms``: the same kind of line until the mail is in a real SMTP server's maildir (aiosmtpd).
 - ``alert_to_push_ms``: until a local push service stand-in receives the encrypted Web Push message.
+- ``link_down_to_webhook_s``: scaled (private Redis, one robot link, a Celery worker with its beat, the
+  default LINK_DOWN_ALERT_S and LINK_WATCH_EVERY_S), the link killed until its link_down alert reaches a
+  webhook: how long a robot nobody watches goes unsaid.
 
 Prints ``name: value`` lines; the machine may be shared.
 """
@@ -36,7 +39,8 @@ from bench._stats import quantile  # noqa: E402
 from robot import interface as ri  # noqa: E402
 from tests.browser.support import CHROMIUM, CHROMIUM_ARGS  # noqa: E402
 from tests.browser.support import login as page_login  # noqa: E402
-from tests.stack import Stack, free_port, wait_for_port  # noqa: E402
+from tests.stack import PYTHON, Stack, free_port, wait_for_port  # noqa: E402
+from tests.support_processes import PrivateRedis  # noqa: E402
 
 EVENTS = 30
 HANGS = 3
@@ -183,6 +187,37 @@ def main() -> None:
     print(f"alert_to_email_max_ms: {max(to_mail):.0f}")
     print(f"alert_to_push_ms: {quantile(sorted(to_push), 0.5):.0f}")
     print(f"alert_to_push_max_ms: {max(to_push):.0f}")
+
+    print(f"link_down_to_webhook_s: {link_down_to_webhook_s():.1f}")
+
+
+def link_down_to_webhook_s() -> float:
+    hook = ThreadingHTTPServer(("127.0.0.1", 0), PushService)
+    hook.received = []
+    threading.Thread(target=hook.serve_forever, daemon=True).start()
+    redis = PrivateRedis().start()
+    try:
+        with Stack(redis_url=redis.url) as stack:
+            stack.manage("shell", "-c", "from robot.alerts.models import Webhook\nWebhook.objects.create("
+                         f"name='chat', url='http://127.0.0.1:{hook.server_address[1]}/', kinds=['link_down'])")
+            worker = stack._spawn([PYTHON, "-m", "celery", "-A", "cyborg_site", "worker", "--beat", "--pool=solo",
+                                   "--without-gossip", "--without-mingle", f"--schedule={stack.tmp / 'beat'}"],
+                                  "worker")
+            stack.wait_robot_online()
+            deadline = time.monotonic() + 60
+            while "ready" not in stack.log("worker"):
+                assert worker.poll() is None and time.monotonic() < deadline, stack.log("worker")[-3000:]
+                time.sleep(0.2)
+            time.sleep(2)  # a few checks with the link up
+            killed = time.time()
+            os.killpg(stack.link_proc.pid, signal.SIGKILL)
+            while not hook.received:
+                assert time.time() - killed < 120, stack.log("worker")[-3000:]
+                time.sleep(0.05)
+            return hook.received[0] - killed
+    finally:
+        hook.shutdown()
+        redis.stop()
 
 
 if __name__ == "__main__":
