@@ -10,6 +10,7 @@ import pytest
 
 from robot import interface as ri
 from robot.audio.mic import MAX_UNFRAMED
+from robot.live.state import get_store
 from robot.sim.audio import dominant_hz
 from tests.audio.support import audio_socket, kind
 from tests.helpers import async_wait_until
@@ -29,7 +30,16 @@ def sim(request):
         yield running
 
 
+def declared_coding() -> str | None:
+    """The microphone coding the link last heard the robot declare (its latched audio_info)."""
+    return ((get_store().get_all().get("audio_info") or {}).get("msg") or {}).get("coding_format")
+
+
 async def test_an_mp3_microphone_reaches_listeners_as_pcm_of_its_tone(link, sim, operator, admin_user):
+    # Until this robot's audio_info arrives, the store may hold none or an earlier robot's (the services
+    # pass shares one Redis): listening then starts on that format and the mp3 one follows.
+    await async_wait_until(lambda: declared_coding() == "mp3", timeout=10, interval=0.1,
+                           what="the robot's mp3 audio_info heard")
     ears, more = await audio_socket(operator), await audio_socket(admin_user)
     for socket in (ears, more):
         await socket.send({"type": "listen", "on": True})
