@@ -122,11 +122,11 @@ class AlertEngine:
         for change in self.book.end_missing("diag:", {s.key for s in signals}, now):
             self.changed(change)
 
-    def acknowledge(self, alert_id: str, by: str, at: float) -> bool:
+    def acknowledge(self, alert_id: str, by: str, at: float) -> Change | None:
         change = self.book.ack(alert_id, by, at)
         if change is not None:
             self.changed(change)
-        return change is not None
+        return change
 
     async def show(self) -> None:
         self.dirty = False
@@ -185,9 +185,10 @@ async def run_alerts(link: RobotLink) -> None:
 async def _ack(link: RobotLink, request: LinkRequest) -> LinkReply:
     engine = _engines.get(link)
     args = request.get("args") or {}
-    if engine is None or not engine.acknowledge(str(args.get("id")), str(args.get("by")), float(args.get("at", 0))):
+    change = engine and engine.acknowledge(str(args.get("id")), str(args.get("by")), float(args.get("at", 0)))
+    if not change:
         return {"ok": False, "error_code": "not_found", "error": "No such alert is on"}
-    return {"ok": True}
+    return {"ok": True, "values": change.record.as_msg()}
 
 
 def install() -> None:

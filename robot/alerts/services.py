@@ -7,6 +7,7 @@ import time
 import uuid
 from typing import Any
 
+from asgiref.sync import async_to_sync
 from django.contrib.auth.models import AnonymousUser, User
 from rest_framework.exceptions import NotFound, PermissionDenied
 
@@ -25,19 +26,28 @@ def _alert_id(raw: str) -> str:
 
 
 def alert_acknowledge(*, user: User | AnonymousUser, alert_id: str) -> dict[str, Any]:
-    """Operators and admins acknowledge; the first acknowledgement stands (who, when)."""
+    """Operators and admins acknowledge; the first acknowledgement stands (who, when). The raiser shows it
+    on every page; an alert raised a moment ago, not kept yet, the raiser keeps acknowledged."""
     if not is_operator(user) or not isinstance(user, User):
         raise PermissionDenied("Only operators and admins acknowledge alerts.")
-    at = time.time()
-    alert = records.acknowledge(alert_id=_alert_id(alert_id), user=user, at=at)
-    if alert is None:
+    key = _alert_id(alert_id)
+    alert = records.acknowledge(alert_id=key, user=user, at=time.time())
+    if alert is not None:
+        kept = records.as_dict(alert)
+        async_to_sync(atell_raiser)(alert_id=key, by=kept["acked_by"], at=kept["acked_at"])
+        return kept
+    shown = async_to_sync(atell_raiser)(alert_id=key, by=user.get_username(), at=time.time())
+    if shown is None:
         raise NotFound("No such alert.")
-    return records.as_dict(alert)
+    return shown
 
 
-async def atell_raiser(*, alert_id: str, by: str, at: float) -> None:
-    """The raiser shows the acknowledgement on every page; an alert that has ended meanwhile is no error."""
+async def atell_raiser(*, alert_id: str, by: str, at: float) -> dict[str, Any] | None:
+    """The raiser shows the acknowledgement on every page and answers the alert as it holds it; an alert
+    that has ended meanwhile is no error."""
     try:
-        await arequest("alert_ack", args={"id": uuid.UUID(alert_id).hex, "by": by, "at": at}, timeout=1)
+        reply = await arequest("alert_ack", args={"id": alert_id, "by": by, "at": at}, timeout=1)
     except RobotError as exc:
         log.info("the acknowledgement of %s is kept but not shown live: %s", alert_id, exc.message)
+        return None
+    return reply.get("values")

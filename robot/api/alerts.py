@@ -10,7 +10,7 @@ from rest_framework.response import Response
 
 from robot.alerts.choices import alert_choice, alert_choice_set, push_subscribe, push_unsubscribe
 from robot.alerts.selectors import alerts_history, alerts_on
-from robot.alerts.services import alert_acknowledge, atell_raiser
+from robot.alerts.services import alert_acknowledge
 from robot.api.base import robot_api_view
 from robot.api.common import error_responses, same, shape
 from robot.api.validation import body_object
@@ -35,9 +35,7 @@ def alerts_view(request: Request) -> Response:
                summary="Acknowledge an alert (operators, admins); the first acknowledgement stands")
 @robot_api_view(["POST"], commands=True)
 def acknowledge_view(request: Request, alert_id: str) -> Response:
-    alert = alert_acknowledge(user=request.user, alert_id=alert_id)
-    async_to_sync(atell_raiser)(alert_id=alert["id"], by=alert["acked_by"], at=alert["acked_at"])
-    return Response(alert)
+    return Response(alert_acknowledge(user=request.user, alert_id=alert_id))
 
 
 _CHOICE = {**same(serializers.BooleanField, "by_email", "by_push"),

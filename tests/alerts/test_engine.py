@@ -2,16 +2,18 @@
 socket, kept in the database, taken over with their start by the next raiser, acknowledged."""
 
 import asyncio
+import threading
 import uuid
 
 import pytest
 from asgiref.sync import sync_to_async
+from django.db import OperationalError
 
 from robot.alerts import engine as alerts_engine
 from robot.alerts.models import Alert
-from robot.alerts.services import alert_acknowledge, atell_raiser
+from robot.alerts.services import alert_acknowledge
 from robot.live.groups import ALERTS_KEY
-from tests.helpers import receive_until, ws_communicator
+from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -73,7 +75,6 @@ async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, vi
         with pytest.raises(Exception, match="operators"):
             await sync_to_async(alert_acknowledge)(user=viewer, alert_id=log["log:/move_base"]["id"])
         acked = await sync_to_async(alert_acknowledge)(user=operator, alert_id=log["log:/move_base"]["id"])
-        await atell_raiser(alert_id=acked["id"], by=acked["acked_by"], at=acked["acked_at"])
         await alerts_frame(communicator, lambda on: "log:/move_base" not in on)
         row = await Alert.objects.aget(id=uuid.UUID(acked["id"]))
         assert row.acked_by_name == operator.username and row.ended_at is not None and row.count == 2
@@ -81,6 +82,41 @@ async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, vi
         second.cancel()
         await asyncio.gather(second, return_exceptions=True)
     await communicator.disconnect()
+
+
+async def test_an_alert_acknowledged_before_it_is_kept_is_kept_acknowledged(link, sim, raiser, operator,
+                                                                           monkeypatch):
+    from robot.alerts import records
+
+    held = threading.Event()
+    save = records.save
+
+    def held_save(record):  # the database away for a moment: the raiser tries again a second later
+        if not held.is_set():
+            raise OperationalError("away")
+        save(record)
+
+    monkeypatch.setattr(records, "save", held_save)
+    def hearing() -> bool:
+        return link in alerts_engine._engines and "battery_low" in alerts_engine._engines[link].book.active
+
+    await async_wait_until(hearing, timeout=10, what="the raiser hearing the robot")
+    engine = alerts_engine._engines[link]
+    sim.call(lambda: sim.robot.rosout(8, "/laser", "driver died"))
+    await async_wait_until(lambda: "log:/laser" in engine.book.active, timeout=10, what="the alert raised")
+    on = engine.book.active["log:/laser"]
+    assert not await Alert.objects.filter(id=uuid.UUID(on.id)).aexists()
+
+    acked = await sync_to_async(alert_acknowledge)(user=operator, alert_id=on.id)
+    assert acked["id"] == on.id and acked["acked_by"] == operator.username and acked["ended_at"] is not None
+    assert "log:/laser" not in engine.book.active
+    held.set()
+    for _ in range(500):
+        row = await Alert.objects.filter(id=uuid.UUID(on.id)).afirst()
+        if row is not None and row.acked_at is not None:
+            break
+        await asyncio.sleep(0.02)
+    assert row is not None and row.acked_by_name == operator.username and row.ended_at is not None
 
 
 async def test_the_estop_raises_a_critical_alert_until_it_is_released(link, sim, raiser, viewer, operator):
