@@ -52,6 +52,16 @@ function axis(el, start, end) {
     day = today;
     return tick;
   }));
+  // Each label stays inside the axis (a date makes one wide, and the day may change at either end);
+  // its mark stays on its time.
+  const width = el.getBoundingClientRect().width;
+  for (const tick of el.children) {
+    const x = (width * parseFloat(tick.style.left)) / 100;
+    const w = tick.getBoundingClientRect().width;
+    const shift = Math.min(Math.max(-w / 2, -x), width - x - w);
+    tick.style.transform = `translateX(${shift}px)`;
+    tick.style.setProperty("--mark", `${-shift}px`);
+  }
 }
 
 export function renderTimeline({ bar, axisEl, detail, rows, caption }, data) {

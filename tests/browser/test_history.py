@@ -4,8 +4,11 @@ zooming (by mouse or finger) fetches finer buckets, From/To only for a custom ra
 from __future__ import annotations
 
 import re
+from datetime import datetime
+from zoneinfo import ZoneInfo
 
 import pytest
+from django.conf import settings
 from playwright.sync_api import expect
 
 from tests.browser.checks import HORIZONTAL_OVERFLOW
@@ -149,6 +152,25 @@ ROBOT_STATES = ["offline", "startup", "suspension", "demo", "manual", "behaviour
                 "waking_up", "sleepy", "sleeping", "exhausted", "a_state_added_later", "and_another"]
 
 
+AXIS_AT = """async (end) => {
+    const { renderTimeline } = await import('/static/js/timeline.js');
+    const el = (id) => document.getElementById(id);
+    const start = end - 86400;
+    renderTimeline({ bar: el('timeline-bar'), axisEl: el('timeline-axis'), detail: el('timeline-detail'),
+                     rows: el('timeline-rows'), caption: el('timeline-caption') },
+                   { start, end, totals: { idle: 86400 }, segments: [], counts: {} });
+    const axis = el('timeline-axis').getBoundingClientRect();
+    let spill = -Infinity, offMark = 0;
+    for (const tick of el('timeline-axis').children) {
+        const r = tick.getBoundingClientRect();
+        spill = Math.max(spill, axis.left - r.left, r.right - axis.right);
+        const mark = r.left + parseFloat(getComputedStyle(tick, '::before').left);
+        offMark = Math.max(offMark, Math.abs(mark - (axis.left + axis.width * parseFloat(tick.style.left) / 100)));
+    }
+    return [spill, offMark];
+}"""
+
+
 def test_the_timeline_has_a_colour_per_state_a_time_axis_and_says_when_each_stretch_was(sized_page, seeded):
     page = sized_page
     login(page, seeded, "vera", next_path="/history/")
@@ -174,6 +196,12 @@ def test_the_timeline_has_a_colour_per_state_a_time_axis_and_says_when_each_stre
     # How often each state was entered.
     expect(page.locator("#timeline-rows tr", has_text="startup").locator("td").nth(3)).to_have_text("1")
     assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0
+    # Wherever the day changes (its label carries the date), at either end too, every label stays inside
+    # the axis and its mark on its time.
+    midnight = datetime.now(ZoneInfo(settings.TIME_ZONE)).replace(hour=0, minute=0, second=0, microsecond=0)
+    for end in (midnight.timestamp() + s for s in (-60, 120, 600, 43200)):
+        spill, off_mark = page.evaluate(AXIS_AT, end)
+        assert spill <= 0.5 and off_mark <= 1.5, (end, spill, off_mark)
 
 
 def test_plots_read_24_hour_times_in_the_site_zone_and_name_their_units(sized_page, seeded):
