@@ -112,16 +112,44 @@ async def _attempt(name: str, step: Step, by: str) -> StepResult:
         return StepResult(name, False, f"{type(exc).__name__}: {exc}")
 
 
-def _late(task: asyncio.Task) -> None:
-    if not task.cancelled():
+class _KeptSteps:
+    """The steps as kept with the latch. A step that answers after the report is logged and kept in its
+    place, so every page shows how it ended; one write at a time, so the newest is the one that stays."""
+
+    background: set[asyncio.Task] = set()
+
+    def __init__(self, steps: list[dict[str, Any]], engaged: list[Latch]) -> None:
+        self.steps = [dict(s) for s in steps]
+        self.engaged = engaged
+        self.lock = asyncio.Lock()
+
+    async def keep(self) -> Latch:
+        async with self.lock:
+            return await arecord_steps(self.engaged[0], [dict(s) for s in self.steps])
+
+    def late(self, task: asyncio.Task) -> None:
+        if task.cancelled():
+            return
         result: StepResult = task.result()
         log.warning("e-stop step %s finished after the answer: %s (%s)", result.step,
                     "ok" if result.ok else "FAILED", result.detail)
+        for entry in self.steps:
+            if entry["step"] == result.step:
+                entry.update(ok=result.ok, detail=f"{result.detail} (after the answer)")
+        if self.engaged:
+            keeping = asyncio.ensure_future(self.keep())
+            self.background.add(keeping)
+            keeping.add_done_callback(self._kept)
+
+    def _kept(self, task: asyncio.Task) -> None:
+        self.background.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            log.warning("could not keep a late e-stop step with the latch", exc_info=task.exception())
 
 
 async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
     """Every step side by side, the zero Twist first (it also latches the link); the report within
-    ``ANSWER_S``, a step still running then reported as such (it goes on, and logs its end). With
+    ``ANSWER_S``, a step still running then reported as such (it goes on, and keeps its end). With
     the report, the latch as it now stands: from the shared store, or, if that could not be
     written, as the link holds it."""
     started = time.monotonic()
@@ -136,23 +164,23 @@ async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
     with emergency():  # the steps' requests pass the link's latch, by the direct path where there is one
         tasks = [asyncio.ensure_future(_attempt(name, step, by)) for name, step in steps]
     done, _ = await asyncio.wait(tasks, timeout=ANSWER_S)
-    results = []
-    for task, (name, _) in zip(tasks, steps, strict=True):
-        if task in done:
-            results.append(task.result())
-        else:
-            task.add_done_callback(_late)
-            results.append(StepResult(name, False, f"no answer within {ANSWER_S:g} s (still trying)"))
+    results = [task.result() if task in done else StepResult(name, False, f"no answer within {ANSWER_S:g} s "
+                                                             "(still trying)")
+               for task, (name, _) in zip(tasks, steps, strict=True)]
     zero, stored = results[0], results[1]
     if not stored.ok and zero.ok:
         results[1] = StepResult("latch", False, f"not in the shared store ({stored.detail}); the robot link holds "
                                 "it and writes it there when the store answers again")
     report = EstopReport((results[1], zero, *results[2:]))
     done_steps = report.as_dict()["steps"]
+    kept = _KeptSteps(done_steps, engaged)
+    for task in tasks:
+        if task not in done:
+            task.add_done_callback(kept.late)
     if engaged:
         try:
             left = max(0.05, ANSWER_S + RECORD_S - (time.monotonic() - started))
-            return report, await asyncio.wait_for(arecord_steps(engaged[0], done_steps), left)
+            return report, await asyncio.wait_for(kept.keep(), left)
         except Exception:
             log.warning("could not keep the e-stop's step results with the latch", exc_info=True)
         return report, Latch(latched=True, by=engaged[0].by, at=engaged[0].at, steps=done_steps)

@@ -125,7 +125,8 @@ async def test_it_answers_offline_as_the_view_does(operator, monkeypatch, django
 
 async def test_it_refuses_an_event_while_the_estop_is_engaged(operator, robot, monkeypatch, django_calls):
     key = await trusted(operator)
-    assert (await post(key, "/api/robot/estop/"))["status"] == 200
+    # Latched either way: on a loaded machine a step can answer after the report (502, still trying).
+    assert (await post(key, "/api/robot/estop/"))["status"] in (200, 502)
     response = await both_ways(monkeypatch, django_calls, key, "/api/robot/event/", {"event": "aborted"})
     assert response["status"] == 409
     assert (await post(key, "/api/robot/estop/release/", {"confirm": True}))["status"] == 200

@@ -1,8 +1,10 @@
-"""Helpers for the teleop tests: a drive socket per user, what reached the simulator."""
+"""Helpers for the teleop tests: a drive socket per user, what reached the simulator, how an E-STOP's
+steps ended."""
 
 from __future__ import annotations
 
 import asyncio
+import time
 from typing import Any
 
 from robot import interface as ri
@@ -54,3 +56,21 @@ async def error_frame(communicator) -> dict[str, Any]:
 
 async def lock_frame(communicator, predicate=lambda f: True) -> dict[str, Any]:
     return await receive_until(communicator, lambda f: f["type"] == "lock" and predicate(f))
+
+
+STILL_TRYING = "(still trying)"
+
+
+async def settled_steps(timeout: float = 10.0) -> dict[str, dict[str, Any]]:
+    """The E-STOP's steps as they ended: on a loaded machine a step can answer after the report (which
+    says it is still trying), and is kept with the latch when it ends."""
+    from robot.commands.latch import alatch
+
+    deadline = time.monotonic() + timeout
+    while True:
+        latch = await alatch()
+        steps = {s["step"]: s for s in latch.steps}
+        if latch.latched and steps and not any(s["detail"].endswith(STILL_TRYING) for s in steps.values()):
+            return steps
+        assert time.monotonic() < deadline, f"E-STOP steps still running after {timeout} s: {steps}"
+        await asyncio.sleep(0.05)

@@ -10,6 +10,7 @@ import pytest
 
 from robot.models import AuditEntry
 from robot.teleop import estop
+from tests.teleop.support import settled_steps
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -47,12 +48,38 @@ async def test_with_no_robot_it_latches_says_what_failed_and_the_release_still_c
 
     report = await estop.estop_run(user=operator, source="api")  # no link in this process, no robot
     assert not report.ok
-    by_step = {s.step: s for s in report.steps}
-    assert by_step["latch"].ok and by_step["drive_lock"].ok
-    assert not by_step["zero_velocity"].ok and by_step["zero_velocity"].detail.startswith("Robot offline")
+    by_step = await settled_steps()  # a loaded machine can answer a step after the report
+    assert by_step["latch"]["ok"] and by_step["drive_lock"]["ok"]
+    assert not by_step["zero_velocity"]["ok"] and by_step["zero_velocity"]["detail"].startswith("Robot offline")
     assert (await alatch()).latched
     # The link does not hear the release (there is none): the store is released and the link follows it.
     latch = await estop.estop_release(user=operator, source="api", confirm=True)
     assert not latch.latched and latch.released_by == "otto" and not (await alatch()).latched
     outcomes = [(e.action, e.ok) async for e in AuditEntry.objects.order_by("id")]
     assert outcomes == [("estop", False), ("estop.release", True)]
+
+
+async def test_a_step_that_answers_after_the_report_is_kept_with_the_latch(operator, monkeypatch):
+    async def slow(by: str) -> str:
+        await asyncio.sleep(estop.ANSWER_S + 0.3)
+        return "motors disabled"
+
+    async def fails_late(by: str) -> str:
+        await asyncio.sleep(estop.ANSWER_S + 0.1)
+        raise estop.RobotError("Robot offline")
+
+    async def quick(by: str) -> str:
+        return "done"
+
+    monkeypatch.setattr(estop, "STEPS", (("zero_velocity", quick), ("drive_lock", fails_late),
+                                         ("disable_motors", slow)))
+    report = await estop.estop_run(user=operator, source="page")
+    late = {s.step: s for s in report.steps if not s.ok}
+    assert set(late) == {"drive_lock", "disable_motors"}
+    assert all(s.detail.endswith("(still trying)") for s in late.values())
+
+    steps = await settled_steps()
+    assert steps["zero_velocity"]["ok"]
+    assert (steps["disable_motors"]["ok"], steps["disable_motors"]["detail"]) == (
+        True, "motors disabled (after the answer)")
+    assert (steps["drive_lock"]["ok"], steps["drive_lock"]["detail"]) == (False, "Robot offline (after the answer)")
