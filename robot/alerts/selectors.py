@@ -13,8 +13,9 @@ from robot.live.state import get_store
 async def alerts_on() -> list[dict[str, Any]]:
     """The raiser's alerts, and the worker's ``link_down`` while no raiser runs."""
     entry = (await get_store().aget_many([ALERTS_KEY])).get(ALERTS_KEY)
+    shown = [a for a in (entry or {}).get("msg", {}).get("alerts", []) if a.get("key") != LINK_DOWN]
     unraised = [records.as_dict(a) async for a in Alert.objects.filter(key=LINK_DOWN, ended_at=None)]
-    return [*(entry or {}).get("msg", {}).get("alerts", []), *unraised]
+    return [*shown, *unraised]
 
 
 def alerts_history(*, limit: int = 100, kind: str = "") -> list[dict[str, Any]]:

@@ -5,7 +5,7 @@ tell anyone that the robot is now unwatched (its E-STOP path, its alerts, its re
 beat runs ``check_links`` every ``LINK_WATCH_EVERY_S``: once the link's last heartbeat is older
 than ``LINK_DOWN_ALERT_S`` the ``link_down`` alert is kept and sent to whoever chose that kind,
 once per outage (its id comes from the dead link's last heartbeat, so two checks, or two
-workers, make one alert); a link that runs again ends it.
+workers, make one alert), and shown on every page's alert strip; a link that runs again ends it.
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ from django.db import IntegrityError
 from robot.alerts import delivery, records
 from robot.alerts.book import Record
 from robot.alerts.models import LINK_DOWN, Alert
+from robot.live.announce import aget_state, apublish_state
+from robot.live.groups import ALERTS_KEY
 from robot.live.state import link_status
 
 log = logging.getLogger(__name__)
@@ -53,10 +55,14 @@ def check_links(now: float | None = None) -> str | None:
         created = False
     if created:
         log.error("%s (last heard %.0f s ago)", TEXT, now - since)
-        asyncio.run(_send(record, delivery.recipients(record.kind, record.severity)))
+        asyncio.run(_show_and_send(record, delivery.recipients(record.kind, record.severity)))
     return "raised" if created else None
 
 
-async def _send(record: Record, targets: list[delivery.Target]) -> None:
+async def _show_and_send(record: Record, targets: list[delivery.Target]) -> None:
+    """Every page's alert strip shows it beside what the last raiser left there, until a raiser runs
+    again and shows its own; and it goes to whoever chose it."""
+    shown = (await aget_state(ALERTS_KEY)).get(ALERTS_KEY, {}).get("alerts", [])
+    await apublish_state(ALERTS_KEY, {"alerts": [record.as_msg(), *(a for a in shown if a.get("key") != KEY)]})
     gate = asyncio.Semaphore(delivery.PARALLEL)
     await asyncio.gather(*(delivery.deliver(target, record, gate) for target in targets))

@@ -12,11 +12,17 @@ from asgiref.sync import async_to_sync
 from robot.alerts import records, watchdog
 from robot.alerts.models import Alert, Webhook
 from robot.alerts.selectors import alerts_on
+from robot.live.announce import aget_state
+from robot.live.groups import ALERTS_KEY
 from robot.live.state import link_status
 from tests.conftest import LinkThread
 from tests.helpers import wait_until
 
 pytestmark = pytest.mark.django_db(transaction=True)
+
+
+def strip() -> list[dict]:
+    return async_to_sync(aget_state)(ALERTS_KEY).get(ALERTS_KEY, {}).get("alerts", [])
 
 
 def test_no_link_running_is_sent_once_per_outage_and_ended_by_a_link_that_runs(sim, settings, http_server):
@@ -39,12 +45,15 @@ def test_no_link_running_is_sent_once_per_outage_and_ended_by_a_link_that_runs(s
     assert body["alert"]["kind"] == "link_down" and body["alert"]["severity"] == "critical"
     (on,) = [a for a in async_to_sync(alerts_on)() if a["kind"] == "link_down"]
     assert on["ended_at"] is None
+    assert [a["id"] for a in strip() if a["key"] == "link_down"] == [on["id"]]  # every page's strip too
     assert "link_down" not in {r.key for r in records.open_records()}  # no link takes it over
 
-    second = LinkThread()
+    second = LinkThread(background=True)  # with its raiser, which shows its own alerts
     second.start()
     try:
         wait_until(lambda: link_status().get("link_running"), timeout=10, what="a link running again")
+        wait_until(lambda: not [a for a in strip() if a["key"] == "link_down"], timeout=10,
+                   what="the raiser's own alerts on the strip")
         assert watchdog.check_links() == "ended"
         assert Alert.objects.get(id=on["id"]).ended_at is not None
         assert not [a for a in async_to_sync(alerts_on)() if a["kind"] == "link_down"]
