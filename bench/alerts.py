@@ -201,7 +201,8 @@ def link_down_to_webhook_s() -> float:
             stack.manage("shell", "-c", "from robot.alerts.models import Webhook\nWebhook.objects.create("
                          f"name='chat', url='http://127.0.0.1:{hook.server_address[1]}/', kinds=['link_down'])")
             worker = stack._spawn([PYTHON, "-m", "celery", "-A", "cyborg_site", "worker", "--beat", "--pool=solo",
-                                   "--without-gossip", "--without-mingle", f"--schedule={stack.tmp / 'beat'}"],
+                                   "--loglevel=INFO", "--without-gossip", "--without-mingle",
+                                   f"--schedule={stack.tmp / 'beat'}"],
                                   "worker")
             stack.wait_robot_online()
             deadline = time.monotonic() + 60
