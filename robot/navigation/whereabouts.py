@@ -24,8 +24,11 @@ from robot.navigation.seeding import location_seed
 
 # A named place as (name, x, y, arrival radius).
 Place = tuple[str, float, float, float]
+# What the robot said it was at, with its pose when it said so.
+Report = tuple[str, dict[str, Any] | None]
 RECHECK_S = 0.5  # at most this often; poses arrive at 10 Hz
 PLACES_FRESH_S = 2.0  # a location added or moved shows within this
+SEED_STILL_M = 0.25
 
 
 def location_at(x: float, y: float, places: Iterable[Place]) -> str:
@@ -44,6 +47,17 @@ def whereabouts(robot_says: str, pose: dict[str, Any] | None, places: Iterable[P
     return {"name": name, "source": "server" if name else ""}
 
 
+def settled_pose(previous: Report | None, report: Report) -> dict[str, Any] | None:
+    """The pose to seed the place the robot names at: only once it has named it twice in a row without
+    moving, since a report can be older than the pose beside it (the place it just left)."""
+    name, pose = report
+    if previous is None or not name or previous[0] != name or pose is None or previous[1] is None:
+        return None
+    moved = math.hypot(float(pose["position"]["x"]) - float(previous[1]["position"]["x"]),
+                       float(pose["position"]["y"]) - float(previous[1]["position"]["y"]))
+    return pose if moved <= SEED_STILL_M else None
+
+
 def _places() -> list[Place]:
     from robot.models import Location
 
@@ -54,11 +68,19 @@ async def track_whereabouts(link: RobotLink) -> None:
     pose_topic, location_topic = ri.topic("robot_pose").name, ri.topic("current_location").name
     latest: dict[str, Any] = {}
     wake = asyncio.Event()
+    reported: Report | None = None
+    to_seed: tuple[str, dict[str, Any]] | None = None
 
     def listener(name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
+        nonlocal reported, to_seed
         if name in (pose_topic, location_topic):
             latest[name] = msg
             wake.set()
+        if name == location_topic:
+            report = (str(msg.get("data") or ""), latest.get(pose_topic))
+            if (settled := settled_pose(reported, report)) is not None:
+                to_seed = (report[0], settled)
+            reported = report
 
     link.listeners.append(listener)
     shown: dict[str, str] | None = None
@@ -73,10 +95,11 @@ async def track_whereabouts(link: RobotLink) -> None:
                 places, places_at = await sync_to_async(_places)(), time.monotonic()
             robot_says = (latest.get(location_topic) or {}).get("data", "")
             pose = latest.get(pose_topic)
-            if robot_says and pose is not None and robot_says not in tried | {p[0] for p in places}:
-                tried.add(robot_says)  # once per name and run: an admin's delete stands until then
-                if await sync_to_async(location_seed)(name=robot_says, pose=pose):
+            if to_seed is not None and to_seed[0] not in tried | {p[0] for p in places}:
+                tried.add(to_seed[0])  # once per name and run: an admin's delete stands until then
+                if await sync_to_async(location_seed)(name=to_seed[0], pose=to_seed[1]):
                     places_at = -math.inf  # look again at once
+            to_seed = None
             now = whereabouts(robot_says, pose, places)
             if now != shown:
                 shown = now

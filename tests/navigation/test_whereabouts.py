@@ -11,7 +11,7 @@ from robot import interface as ri
 from robot.live.groups import AT_LOCATION_KEY
 from robot.models import Location
 from robot.navigation.seeding import location_seed
-from robot.navigation.whereabouts import location_at, track_whereabouts, whereabouts
+from robot.navigation.whereabouts import location_at, settled_pose, track_whereabouts, whereabouts
 from tests.helpers import wait_until
 from tests.navigation.conftest import stored
 
@@ -34,6 +34,16 @@ def test_the_robots_own_answer_wins():
     assert whereabouts("", pose(2.0, 0.0), PLACES) == {"name": "kitchen", "source": "server"}
     assert whereabouts("", None, PLACES) == {"name": "", "source": ""}
 
+
+
+def test_a_place_the_robot_names_is_seeded_only_where_it_stayed_while_naming_it():
+    assert settled_pose(None, ("reception", pose(1.0, 1.0))) is None  # once is not enough
+    assert settled_pose(("reception", pose(1.0, 1.0)), ("reception", pose(1.1, 1.0))) == pose(1.1, 1.0)
+    # A report older than the pose beside it: the robot had left (set down elsewhere) when it arrived.
+    assert settled_pose(("reception", pose(1.0, 1.0)), ("reception", pose(-3.0, 0.0))) is None
+    assert settled_pose(("", pose(1.0, 1.0)), ("reception", pose(1.0, 1.0))) is None
+    assert settled_pose(("reception", pose(1.0, 1.0)), ("", pose(1.0, 1.0))) is None
+    assert settled_pose(("reception", None), ("reception", pose(1.0, 1.0))) is None
 
 @pytest.mark.django_db(transaction=True)
 def test_it_says_where_the_robot_arrived_at_a_place_only_the_server_knows(sim, nav_link):
