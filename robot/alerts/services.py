@@ -30,13 +30,13 @@ def alert_acknowledge(*, user: User | AnonymousUser, alert_id: str) -> dict[str,
     on every page; an alert raised a moment ago, not kept yet, the raiser keeps acknowledged."""
     if not is_operator(user) or not isinstance(user, User):
         raise PermissionDenied("Only operators and admins acknowledge alerts.")
-    key = _alert_id(alert_id)
-    alert = records.acknowledge(alert_id=key, user=user, at=time.time())
-    if alert is not None:
-        kept = records.as_dict(alert)
-        async_to_sync(atell_raiser)(alert_id=key, by=kept["acked_by"], at=kept["acked_at"])
+    key, at = _alert_id(alert_id), time.time()
+    alert = records.acknowledge(alert_id=key, user=user, at=at)
+    kept = records.as_dict(alert) if alert is not None else None
+    by, at = (kept["acked_by"], kept["acked_at"]) if kept is not None else (user.get_username(), at)
+    shown = async_to_sync(atell_raiser)(alert_id=key, by=by, at=at)
+    if kept is not None:
         return kept
-    shown = async_to_sync(atell_raiser)(alert_id=key, by=user.get_username(), at=time.time())
     if shown is None:
         raise NotFound("No such alert.")
     return shown
@@ -50,4 +50,5 @@ async def atell_raiser(*, alert_id: str, by: str, at: float) -> dict[str, Any] |
     except RobotError as exc:
         log.info("the acknowledgement of %s is kept but not shown live: %s", alert_id, exc.message)
         return None
-    return reply.get("values")
+    shown = reply.get("values")
+    return {k: v for k, v in shown.items() if k != "event"} if shown else None  # the API's shape

@@ -164,8 +164,8 @@ async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
     with emergency():  # the steps' requests pass the link's latch, by the direct path where there is one
         tasks = [asyncio.ensure_future(_attempt(name, step, by)) for name, step in steps]
     done, _ = await asyncio.wait(tasks, timeout=ANSWER_S)
-    results = [task.result() if task in done else StepResult(name, False, f"no answer within {ANSWER_S:g} s "
-                                                             "(still trying)")
+    trying = f"no answer within {ANSWER_S:g} s (still trying)"
+    results = [task.result() if task in done else StepResult(name, False, trying)
                for task, (name, _) in zip(tasks, steps, strict=True)]
     zero, stored = results[0], results[1]
     if not stored.ok and zero.ok:

@@ -54,10 +54,11 @@ function axis(el, start, end) {
   }));
   // Each label stays inside the axis (a date makes one wide, and the day may change at either end);
   // its mark stays on its time.
+  // Measured all at once, then moved: one layout, not one per label.
   const width = el.getBoundingClientRect().width;
-  for (const tick of el.children) {
+  const labels = [...el.children].map((tick) => [tick, tick.getBoundingClientRect().width]);
+  for (const [tick, w] of labels) {
     const x = (width * parseFloat(tick.style.left)) / 100;
-    const w = tick.getBoundingClientRect().width;
     const shift = Math.min(Math.max(-w / 2, -x), width - x - w);
     tick.style.transform = `translateX(${shift}px)`;
     tick.style.setProperty("--mark", `${-shift}px`);
