@@ -73,7 +73,7 @@ def test_the_service_worker_shows_a_pushed_alert_as_a_notification(browser, stac
         registration = next(r for r in registrations if r["scopeURL"] == scope)
         cdp.send("ServiceWorker.deliverPushMessage", {
             "origin": stack.url, "registrationId": registration["registrationId"], "data": json.dumps(payload(record))})
-        for _ in range(100):
+        for _ in range(300):  # the whole Chromium beside a loaded suite can take seconds to show it
             shown = page.evaluate("""async (scope) => {
                 const notes = await (await navigator.serviceWorker.getRegistration(scope)).getNotifications();
                 return notes.map((n) => [n.title, n.body, n.tag]);
