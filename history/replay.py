@@ -19,6 +19,7 @@ from django.db import connection
 from django.db.models import Max, Min, QuerySet
 from django.urls import reverse
 
+from history import replay_modes
 from history.frames import frame_at
 from history.models import CameraFrame, Incident, Sample
 from history.storage import utc
@@ -151,6 +152,10 @@ def state_at(t: float, *, hidden: frozenset[str] = frozenset()) -> dict[str, Any
     """The robot as it was at ``t``; topics named in ``hidden`` (sensitive for this person) left out."""
     names = topic_names(STATE_KEYS, hidden)
     topics = {names[name]: value for name, value in latest_each(names, t).items()}
+    if (request := replay_modes.request_at(t, topics.get("robot_mode"))) is not None:
+        topics[replay_modes.REQUEST_KEY] = request
+    if (change := topics.get("state_change")) is not None:
+        topics[replay_modes.REACHED_KEY] = {"t": change["t"], "msg": replay_modes.reached(change["msg"])}
     pose = topics.get("robot_pose")
     return {
         "t": t,
@@ -180,6 +185,10 @@ def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) ->
                 poses.append(point)
         else:
             changes.append([round(at.timestamp(), 3), key, data])
+            if key == "state_change":
+                changes.append([round(at.timestamp(), 3), replay_modes.REACHED_KEY, replay_modes.reached(data)])
+    changes += [[round(at, 3), replay_modes.REQUEST_KEY, msg] for at, msg in replay_modes.requests(start, end, hidden=hidden)]
+    changes.sort(key=lambda change: change[0])
     frames = CameraFrame.objects.filter(t__gt=start, t__lte=end).order_by("t").values_list("t", "id")
     prefix = frame_url(0).removesuffix("0.jpg")
     maps = Sample.objects.filter(topic=ri.topic("map").name, received_at__gt=utc(start), received_at__lte=utc(end))

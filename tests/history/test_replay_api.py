@@ -11,9 +11,11 @@ import math
 import pytest
 from mcap.reader import make_reader
 
+from history.defaults import ensure_default_policies
 from history.frames import write_frames
 from history.incidents import incident_open
 from history.models import Incident, Mode, TopicPolicy
+from history.replay_modes import reached_mode
 from history.storage import write_rows
 from robot import interface as ri
 from robot.models import AuditEntry
@@ -144,3 +146,45 @@ def test_an_incident_exports_as_one_mcap_with_camera_and_pose(viewer_api, sessio
     assert len(times["/camera"]) == 181  # every frame in the 90 s, two a second
     first = next(m for _, c, m in reader.iter_messages(topics=["/camera"]))
     assert json.loads(first.data)["format"] == "jpeg"
+
+
+def test_replay_shows_the_mode_requested_here_and_the_one_reached_in_a_default_setup(viewer_api, db, settings):
+    """The default MODE_COMMANDER=server publishes nothing on robot_mode: the request is the audited one."""
+    settings.MODE_COMMANDER = "server"
+    ensure_default_policies()
+    recorded = set(TopicPolicy.objects.exclude(mode=Mode.OFF).values_list("topic", flat=True))
+    assert {ri.topic("robot_mode").name, ri.topic("state_change").name} <= recorded
+    write_rows([row("state_change", T0 + at, {"event": e, "from_system_state": a, "to_system_state": b})
+                for at, e, a, b in ((1, "succeeded", "startup", "suspension"), (10, "aborted", "suspension", "suspension"),
+                                    (11, "behaviour_start", "suspension", "idle"), (40, "manual_start", "suspension",
+                                                                                   "manual"))])
+    for at, action, params, ok in ((11.5, "mode", {"mode": "behaviour"}, True), (30, "mode", {"mode": "manual"}, False),
+                                   (60, "estop", {}, True)):
+        entry = AuditEntry.objects.create(username="otto", source="page", action=action, params=params, ok=ok,
+                                          outcome="" if ok else "step 2 failed")
+        AuditEntry.objects.filter(pk=entry.pk).update(created=_utc(T0 + at))
+
+    def mode_at(at: float) -> tuple:
+        topics = viewer_api.get("/api/history/replay/state/", {"t": T0 + at}).json()["topics"]
+        request, reached = topics.get("mode_request"), topics.get("mode_reached")
+        return ((request["msg"]["mode"], request["msg"]["by"], request["msg"]["ok"]) if request else None,
+                (reached["msg"]["mode"], reached["msg"]["state"]) if reached else None)
+
+    assert mode_at(5) == (None, (ri.Mode.STOP.short, "suspension"))
+    assert mode_at(20) == (("behaviour", "otto", True), ("behaviour", "idle"))
+    assert mode_at(35) == (("manual", "otto", False), ("behaviour", "idle"))
+    assert mode_at(50) == (("manual", "otto", False), ("manual", "manual"))
+    assert mode_at(70) == (("stop", "otto", True), ("manual", "manual"))
+
+    # A player runs through the same, in time order.
+    changes = viewer_api.get("/api/history/replay/window/", {"start": T0 + 5, "end": T0 + 65}).json()["changes"]
+    modes = [(round(t - T0, 1), key, msg.get("mode")) for t, key, msg in changes if key.startswith("mode_")]
+    assert modes == [(10, "mode_reached", "stop"), (11, "mode_reached", "behaviour"), (11.5, "mode_request", "behaviour"),
+                     (30, "mode_request", "manual"), (40, "mode_reached", "manual"), (60, "mode_request", "stop")]
+
+
+@pytest.mark.parametrize(("state", "mode"), [
+    ("suspension", "stop"), ("demo", "demo"), ("manual", "manual"), ("idle", "behaviour"), ("sleeping", "behaviour"),
+    ("navigation_planning", "behaviour"), ("startup", None), ("", None)])
+def test_the_mode_reached_is_the_mode_whose_state_the_robot_is_in(state, mode):
+    assert reached_mode(state) == mode

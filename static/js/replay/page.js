@@ -43,7 +43,9 @@ function render(moment) {
   text("replay-time", fmt(moment.t));
   scrubber.value = String(Math.round(((moment.t - range.start) / (range.end - range.start)) * 1000));
   text("r-state", msg("state_change") ? msg("state_change").to_system_state : "—");
-  text("r-mode", msg("robot_mode") ? msg("robot_mode").data : "—");
+  const request = msg("mode_request"), reached = msg("mode_reached");
+  text("r-mode", request ? `${request.mode}${request.by ? ` by ${request.by}` : ""}${request.ok ? "" : " · failed"}` : "—");
+  text("r-mode-reached", reachedText(reached, request));
   const emotion = msg("emotional_state");
   text("r-emotion", emotion ? emotion.to_emotional_state || emotion.emotional_state || JSON.stringify(emotion).slice(0, 60) : "—");
   text("r-battery", msg("battery_soc") ? `${Math.round(msg("battery_soc").data * 100)} %` : "—");
@@ -68,6 +70,14 @@ function render(moment) {
   }
   rows($("r-log"), moment.log, (l) => [clock(l.t), l.level, l.name, l.msg]);
   rows($("r-commands"), moment.commands, (c) => [clock(c.t), c.who, c.action, c.ok ? "ok" : c.outcome || "failed"]);
+}
+
+// The mode whose state the robot was in (its state named when it differs), ticked when it is the one requested.
+function reachedText(reached, request) {
+  if (!reached || !reached.state) return "—";
+  if (!reached.mode) return `none (${reached.state})`;
+  const named = reached.state === reached.mode ? reached.mode : `${reached.mode} (${reached.state})`;
+  return request && request.mode === reached.mode ? `${named} ✓` : named;
 }
 
 async function seek(to) {
