@@ -89,6 +89,8 @@ MIDDLEWARE = [
     "dashboard.access_audit.ActorMiddleware",
     # The browser an account logged in from, let in while that account is flooded (dashboard.login_flood).
     "dashboard.login_flood.DeviceCookieMiddleware",
+    # Each signed-in session's "last seen", for its person's account page (dashboard.sessions).
+    "dashboard.sessions.SessionSeenMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "dashboard.middleware.LoginRequiredMiddleware",

@@ -26,5 +26,6 @@ class DashboardConfig(AppConfig):
         user_locked_out.connect(audit_lockout, dispatch_uid="dashboard.audit_lockout")
         import dashboard.access_audit  # its receivers: access and settings changes are audited
         import dashboard.login_flood  # its receiver: the browser an account logged in from
-        import dashboard.revocation  # noqa: F401  (its receivers: access changes reach open sockets)
+        import dashboard.revocation  # its receivers: access changes reach open sockets
+        import dashboard.sessions  # noqa: F401  (its receivers: each person's sessions are recorded)
         import robot.api.tokens  # noqa: F401  (its receivers: a password change ends the tokens)

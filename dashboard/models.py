@@ -34,3 +34,21 @@ class SsoIdentity(models.Model):
 
     def __str__(self) -> str:
         return f"{self.user} ({self.issuer} {self.subject})"
+
+
+class SessionRecord(models.Model):
+    """One signed-in browser of a person, so they can see and end their sessions (Django's session
+    store cannot be asked for one person's): made at login (dashboard.sessions), gone with the session."""
+
+    user = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.CASCADE, related_name="session_records")
+    session_key = models.CharField(max_length=40, unique=True)
+    address = models.CharField(max_length=45, blank=True)
+    user_agent = models.CharField(max_length=300, blank=True)
+    created = models.DateTimeField(auto_now_add=True)
+    last_seen = models.DateTimeField(auto_now_add=True)
+
+    class Meta:
+        ordering = ["-last_seen"]
+
+    def __str__(self) -> str:
+        return f"{self.user} from {self.address or '?'}"

@@ -2,6 +2,15 @@
 
 from django.urls import path
 
+from dashboard.views.account import (
+    account,
+    account_alerts,
+    account_email,
+    account_email_verify,
+    account_password,
+    account_sessions,
+    account_token,
+)
 from dashboard.views.activity import activity
 from dashboard.views.alerts import alerts_page
 from dashboard.views.drive import drive
@@ -19,6 +28,13 @@ urlpatterns = [
     path("", home, name="home"),
     path("healthz", healthz, name="healthz"),
     path("activity/", activity, name="activity"),
+    path("account/", account, name="account"),
+    path("account/email/", account_email, name="account-email"),
+    path("account/email/verify/<str:token>/", account_email_verify, name="account-email-verify"),
+    path("account/alerts/", account_alerts, name="account-alerts"),
+    path("account/token/", account_token, name="account-token"),
+    path("account/password/", account_password, name="account-password"),
+    path("account/sessions/", account_sessions, name="account-sessions"),
     path("alerts/", alerts_page, name="alerts"),
     path("map/", map_page, name="map"),
     path("map/image/<str:version>.png", map_image, name="map-image"),

@@ -92,4 +92,5 @@ class Location(models.Model):
     def __str__(self) -> str:
         return self.name
 
+from robot.api.models import TokenExpiry  # noqa: E402,F401  (an API token's chosen end belongs to this app)
 from robot.uplink.models import UplinkCredential  # noqa: E402,F401  (the uplink credentials belong to this app)

@@ -26,7 +26,7 @@ def alert_choice(user: User | AnonymousUser) -> dict[str, Any]:
     person = _person(user)
     choice = AlertChoice.objects.filter(user=person).first() or AlertChoice(user=person)
     return {"by_email": choice.by_email, "by_push": choice.by_push, "kinds": list(choice.kinds),
-            "min_severity": choice.min_severity, "email": person.email, "kinds_available": KINDS,
+            "min_severity": choice.min_severity, "email": choice.address, "kinds_available": KINDS,
             "push_public_key": push.public_key(), "push_browsers": PushSubscription.objects.filter(user=person).count()}
 
 
@@ -46,8 +46,9 @@ def alert_choice_set(user: User | AnonymousUser, changes: dict[str, Any]) -> dic
         changes["kinds"] = sorted(set(kinds))
     if "min_severity" in changes and changes["min_severity"] not in SEVERITY_RANK:
         raise serializers.ValidationError({"min_severity": [f"one of: {', '.join(SEVERITY_RANK)}"]})
-    if changes.get("by_email") and not person.email:
-        raise serializers.ValidationError({"by_email": ["your account has no e-mail address"]})
+    if changes.get("by_email") and not (AlertChoice.objects.filter(user=person).first() or
+                                        AlertChoice(user=person)).address:
+        raise serializers.ValidationError({"by_email": ["no e-mail address: give yours on your account page"]})
     AlertChoice.objects.update_or_create(user=person, defaults=changes)
     return alert_choice(person)
 

@@ -60,8 +60,8 @@ def recipients(kind: str, severity: str) -> list[Target]:
     for choice in AlertChoice.objects.select_related("user").filter(user__is_active=True):
         if not choice.wants(kind, severity):
             continue
-        if choice.by_email and choice.user.email:
-            out.append(Target("email", choice.user.email))
+        if choice.by_email and choice.address:
+            out.append(Target("email", choice.address))
         if choice.by_push:
             out += [Target("push", {"endpoint": s.endpoint, "keys": {"p256dh": s.p256dh, "auth": s.auth}}, s.id)
                     for s in PushSubscription.objects.filter(user=choice.user)]

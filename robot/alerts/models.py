@@ -60,9 +60,17 @@ class AlertChoice(models.Model):
     by_push = models.BooleanField(default=False)
     kinds = models.JSONField(default=list, blank=True, help_text="Kinds of alert to send (empty: none).")
     min_severity = models.CharField(max_length=16, choices=Alert.Severity.choices, default=Alert.Severity.WARNING)
+    email = models.EmailField(blank=True, help_text="The person's own address for alerts, kept once they opened "
+                              "the link mailed to it (robot.alerts.addresses); empty: their account's address.")
 
     def __str__(self) -> str:
         return f"alerts for {self.user}"
+
+    @property
+    def address(self) -> str:
+        """Where this person's alerts go by e-mail: their verified own address, else the account's
+        (set by an admin or the sign-in provider)."""
+        return self.email or self.user.email
 
     def wants(self, kind: str, severity: str) -> bool:
         return kind in self.kinds and SEVERITY_RANK.get(severity, 0) >= SEVERITY_RANK[self.min_severity]

@@ -11,15 +11,16 @@ from typing import Any
 from asgiref.sync import sync_to_async
 from django.conf import settings
 from django.contrib.auth import get_user_model
-from django.db import DatabaseError, connection
+from django.db import DatabaseError, connection, transaction
 from django.db.models.signals import post_delete, post_save
 from django.dispatch import receiver
 from django.utils import timezone
 from rest_framework.authentication import TokenAuthentication
 from rest_framework.authtoken.models import Token
-from rest_framework.exceptions import AuthenticationFailed
+from rest_framework.exceptions import AuthenticationFailed, ValidationError
 
 from cyborg_site.roles import role_of
+from robot.api.models import TokenExpiry
 
 # A valid token is trusted this long without asking the database again (per process): a deleted
 # token, an expired one or a deactivated or demoted user stops working within this time in every
@@ -30,6 +31,9 @@ _renewing: dict[str, asyncio.Future[Any]] = {}
 
 
 def expires_at(token: Token) -> datetime | None:
+    chosen = TokenExpiry.objects.filter(token=token).values_list("expires", flat=True).first()
+    if chosen is not None:
+        return chosen
     days = settings.API_TOKEN_DAYS
     return token.created + timedelta(days=days) if days > 0 else None
 
@@ -46,6 +50,25 @@ def token_for(user: Any) -> Token:
         token.delete()
         token = Token.objects.create(user=user)
     return token
+
+
+def token_create(*, user: Any, days: float) -> Token:
+    """A new token for ``user`` that ends ``days`` from now (at most ``API_TOKEN_DAYS``, when that is
+    set); it takes the place of the one they had."""
+    longest = settings.API_TOKEN_DAYS
+    if not days > 0 or (longest > 0 and days > longest):
+        raise ValidationError({"days": [f"more than 0 and at most {longest:g}" if longest > 0 else "more than 0"]})
+    with transaction.atomic():
+        Token.objects.filter(user=user).delete()
+        token = Token.objects.create(user=user)
+        TokenExpiry.objects.create(token=token, expires=timezone.now() + timedelta(days=days))
+    return token
+
+
+def token_revoke(*, user: Any) -> bool:
+    """End ``user``'s token; False when they had none."""
+    deleted, _ = Token.objects.filter(user=user).delete()
+    return deleted > 0
 
 
 class CachedTokenAuthentication(TokenAuthentication):
