@@ -187,7 +187,8 @@ def window(start: float, end: float, *, hidden: frozenset[str] = frozenset()) ->
             changes.append([round(at.timestamp(), 3), key, data])
             if key == "state_change":
                 changes.append([round(at.timestamp(), 3), replay_modes.REACHED_KEY, replay_modes.reached(data)])
-    changes += [[round(at, 3), replay_modes.REQUEST_KEY, msg] for at, msg in replay_modes.requests(start, end, hidden=hidden)]
+    requests = replay_modes.requests(start, end, hidden=hidden)
+    changes += [[round(at, 3), replay_modes.REQUEST_KEY, msg] for at, msg in requests]
     changes.sort(key=lambda change: change[0])
     frames = CameraFrame.objects.filter(t__gt=start, t__lte=end).order_by("t").values_list("t", "id")
     prefix = frame_url(0).removesuffix("0.jpg")

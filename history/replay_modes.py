@@ -61,8 +61,8 @@ def _from_topic(t: float, msg: dict[str, Any]) -> tuple[float, dict[str, Any]] |
 
 def requests(start: float, end: float, *, hidden: frozenset[str] = frozenset()) -> list[tuple[float, dict[str, Any]]]:
     """Every mode request in (start, end], in time order."""
-    found = [r for e in AuditEntry.objects.filter(action__in=MODE_ACTIONS, created__gt=utc(start), created__lte=utc(end))
-             if (r := _from_audit(e)) is not None]
+    audited = AuditEntry.objects.filter(action__in=MODE_ACTIONS, created__gt=utc(start), created__lte=utc(end))
+    found = [r for e in audited if (r := _from_audit(e)) is not None]
     topic = ri.topic("robot_mode").name
     if topic not in hidden:
         rows = Sample.objects.filter(topic=topic, received_at__gt=utc(start), received_at__lte=utc(end))

@@ -154,10 +154,10 @@ def test_replay_shows_the_mode_requested_here_and_the_one_reached_in_a_default_s
     ensure_default_policies()
     recorded = set(TopicPolicy.objects.exclude(mode=Mode.OFF).values_list("topic", flat=True))
     assert {ri.topic("robot_mode").name, ri.topic("state_change").name} <= recorded
+    changes = ((1, "succeeded", "startup", "suspension"), (10, "aborted", "suspension", "suspension"),
+               (11, "behaviour_start", "suspension", "idle"), (40, "manual_start", "suspension", "manual"))
     write_rows([row("state_change", T0 + at, {"event": e, "from_system_state": a, "to_system_state": b})
-                for at, e, a, b in ((1, "succeeded", "startup", "suspension"), (10, "aborted", "suspension", "suspension"),
-                                    (11, "behaviour_start", "suspension", "idle"), (40, "manual_start", "suspension",
-                                                                                   "manual"))])
+                for at, e, a, b in changes])
     for at, action, params, ok in ((11.5, "mode", {"mode": "behaviour"}, True), (30, "mode", {"mode": "manual"}, False),
                                    (60, "estop", {}, True)):
         entry = AuditEntry.objects.create(username="otto", source="page", action=action, params=params, ok=ok,
@@ -179,8 +179,9 @@ def test_replay_shows_the_mode_requested_here_and_the_one_reached_in_a_default_s
     # A player runs through the same, in time order.
     changes = viewer_api.get("/api/history/replay/window/", {"start": T0 + 5, "end": T0 + 65}).json()["changes"]
     modes = [(round(t - T0, 1), key, msg.get("mode")) for t, key, msg in changes if key.startswith("mode_")]
-    assert modes == [(10, "mode_reached", "stop"), (11, "mode_reached", "behaviour"), (11.5, "mode_request", "behaviour"),
-                     (30, "mode_request", "manual"), (40, "mode_reached", "manual"), (60, "mode_request", "stop")]
+    assert modes == [(10, "mode_reached", "stop"), (11, "mode_reached", "behaviour"),
+                     (11.5, "mode_request", "behaviour"), (30, "mode_request", "manual"),
+                     (40, "mode_reached", "manual"), (60, "mode_request", "stop")]
 
 
 @pytest.mark.parametrize(("state", "mode"), [
