@@ -1,7 +1,8 @@
 // The Topics page: every topic the robot has (searchable, publishers, a rate on request) and one
 // topic live — the message as an expandable JSON tree redrawn at most view_rate_hz (pause
 // freezes it), copy, a uPlot of any numeric field clicked in the tree (several on one plot, fed
-// by every update the server sends), and recording it (admins).
+// by every update the server sends), and recording it (admins; its current policy is shown, and
+// one already set is replaced only when the admin says so).
 /* global uPlot */
 import { attempt, getJSON, notify, request } from "./api.js";
 import { readConfig } from "./config.js";
@@ -105,6 +106,8 @@ function openTopic(name, type = "") {
   $("topic-message").replaceChildren();
   for (const id of ["topic-pause", "topic-copy"]) $(id).disabled = false;
   $("topic-record").disabled = $("topic-record").dataset.canRecord !== "1";
+  $("topic-policy").textContent = "";
+  showPolicy(name);
   for (const tr of document.querySelectorAll(".topic-row")) tr.setAttribute("aria-selected", String(tr.dataset.topic === name));
   history.replaceState(null, "", `?${new URLSearchParams({ topic: name })}`);
   if (NARROW.matches) $("topic-card").scrollIntoView({ block: "start" });
@@ -302,11 +305,47 @@ async function copyMessage() {
   notify(`Copied the message of ${current.name}.`, "ok");
 }
 
+// --- recording ---------------------------------------------------------------------------
+
+// A duration as an admin types it in the recording policies ("30 d", "90 min", "1 s").
+function duration(s) {
+  for (const [unit, size] of [["d", 86400], ["h", 3600], ["min", 60]]) if (s >= size && s % size === 0) return `${s / size} ${unit}`;
+  return `${+s.toFixed(3)} s`;
+}
+
+function describePolicy(policy) {
+  if (!policy || policy.mode === "off") return "Not recorded";
+  const how = policy.mode === "every" ? "every message" : `every ${duration(policy.effective_interval_s)}`;
+  return `Recorded ${how}, ${policy.retention_s ? `kept ${duration(policy.retention_s)}` : "kept until deleted"}`;
+}
+
+// The topic's recording policy as the server has it now (null: none), shown in the card.
+async function showPolicy(name) {
+  const answer = await attempt(getJSON(config.urls.policies), { context: "Recording policies" });
+  if (!answer || current?.name !== name) return undefined;
+  const policy = answer.topics.find((p) => p.topic === name) ?? null;
+  $("topic-policy").textContent = `${describePolicy(policy)}.`;
+  $("topic-policy").dataset.mode = policy?.mode ?? "none";
+  return policy;
+}
+
 async function record() {
   if (!current) return;
-  const body = { topics: [{ topic: current.name, msg_type: current.type, mode: config.record_mode }] };
-  const answer = await attempt(request("PATCH", config.urls.policies, body), { context: `Record ${current.name}` });
-  if (answer) notify(`${current.name} is recorded (every message); see History.`, "ok");
+  const name = current.name;
+  const policy = await showPolicy(name);
+  if (policy === undefined) return;
+  if (policy?.mode === config.record_mode) { notify(`${name} is already recorded every message.`, "ok"); return; }
+  // Another recording policy is the admin's choice: replaced only when they say so.
+  if (policy && policy.mode !== "off"
+      && !confirm(`${name}: ${describePolicy(policy).toLowerCase()}. Record every message instead?`)) {
+    notify(`${name} kept as it was: ${describePolicy(policy).toLowerCase()}.`, "ok");
+    return;
+  }
+  const body = { topics: [{ topic: name, msg_type: current.type, mode: config.record_mode }] };
+  const answer = await attempt(request("PATCH", config.urls.policies, body), { context: `Record ${name}` });
+  if (!answer) return;
+  await showPolicy(name);
+  notify(`${name} is recorded (every message); see History.`, "ok");
 }
 
 $("topics-search").addEventListener("input", renderList);

@@ -160,3 +160,56 @@ def test_a_fast_topic_is_redrawn_a_few_times_a_second(stack, page):
     redraws, frames = page.evaluate("[window.redraws, window.framesIn]")
     assert frames >= 3 * window_s * 4, frames  # it comes far faster than a person reads
     assert window_s <= redraws <= window_s * 5, (redraws, frames)  # yet is redrawn at most about 4 times a second
+
+
+VOLTAGE = ri.topic("battery_voltage").name
+
+
+def _policy(page, stack, topic: str) -> dict | None:
+    policies = page.request.get(f"{stack.url}/api/history/topics/").json()["topics"]
+    return next((p for p in policies if p["topic"] == topic), None)
+
+
+def _set_policy(page, stack, item: dict) -> None:
+    token = next(c["value"] for c in page.context.cookies() if c["name"] == "csrftoken")
+    answer = page.request.patch(f"{stack.url}/api/history/topics/", data={"topics": [item]},
+                                headers={"X-CSRFToken": token})
+    assert answer.ok, answer.text()
+
+
+def test_record_shows_the_current_policy_and_asks_before_replacing_it(stack, page):
+    login(page, stack, "ada", next_path="/topics/")
+    before = _policy(page, stack, VOLTAGE)
+    _set_policy(page, stack, {"topic": VOLTAGE, "msg_type": "std_msgs/Float64", "mode": "periodic",
+                              "interval_s": 1.0, "retention_s": 2 * 86400.0})
+    try:
+        page.locator(f"tr.topic-row[data-topic='{VOLTAGE}'] .topic-open").click()
+        expect(page.locator("#topic-policy")).to_have_text("Recorded every 1 s, kept 2 d.")
+        asked: list[str] = []
+
+        def answer(accept: bool):
+            def handle(dialog) -> None:
+                asked.append(dialog.message)
+                dialog.accept() if accept else dialog.dismiss()
+            return handle
+
+        # Said no: the admin's policy stays as it was.
+        page.once("dialog", answer(False))
+        page.click("#topic-record")
+        expect(page.locator(".toast, .notice", has_text="kept as it was").first).to_be_visible()
+        assert asked == [f"{VOLTAGE}: recorded every 1 s, kept 2 d. Record every message instead?"], asked
+        policy = _policy(page, stack, VOLTAGE)
+        assert policy is not None and (policy["mode"], policy["interval_s"]) == ("periodic", 1.0), policy
+        # Said yes: every message, and the card says so.
+        page.once("dialog", answer(True))
+        page.click("#topic-record")
+        expect(page.locator("#topic-policy")).to_have_text("Recorded every message, kept 2 d.")
+        assert len(asked) == 2
+        assert _policy(page, stack, VOLTAGE)["mode"] == "every"
+        # Already so: nothing to ask.
+        page.click("#topic-record")
+        expect(page.locator(".toast, .notice", has_text="already recorded every message").first).to_be_visible()
+        assert len(asked) == 2
+    finally:
+        kept = ("topic", "msg_type", "mode", "interval_s", "retention_s")
+        _set_policy(page, stack, {k: before[k] for k in kept} if before else {"topic": VOLTAGE, "mode": "off"})
