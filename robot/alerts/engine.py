@@ -38,6 +38,9 @@ log = logging.getLogger(__name__)
 
 TICK_S = 0.2
 OFFLINE_GRACE_S = 2.0  # a reconnect's blink raises nothing
+# Until the robot was first connected: a server and a simulator started together (`make run`) leave
+# the simulator tens of seconds to listen on a loaded machine, and that start is no outage.
+FIRST_CONNECT_GRACE_S = 30.0
 EVENT_QUIET_S = 600.0  # an ERROR line with no repeat for this long ends
 SAVE_ATTEMPTS = 3
 
@@ -56,6 +59,7 @@ class AlertEngine:
         self.saves: asyncio.Queue[Record] = asyncio.Queue()
         self.saving: asyncio.Future | None = None
         self.offline_since: float | None = None
+        self.ever_connected = False
         self.pressed: list[str] = []  # the bumpers pressed in the last message
         self._names = {ri.topic(k).name: k for k in ("battery_soc", "bumper_state", "rosout", "diagnostics")}
 
@@ -99,11 +103,16 @@ class AlertEngine:
         link = self.link
         if link.connected:
             self.offline_since = None
+            self.ever_connected = True
         elif self.offline_since is None:
             self.offline_since = now
-        for signal in rules.link(connected=link.connected, offline_for=now - (self.offline_since or now),
+        offline_for = now - (self.offline_since or now)
+        starting = not self.ever_connected and offline_for < FIRST_CONNECT_GRACE_S
+        for signal in rules.link(connected=link.connected, offline_for=offline_for,
                                  responding=link.responding, grace_s=OFFLINE_GRACE_S):
-            self.apply(signal, now)
+            # Neither raised nor ended while starting: an outage handed over by the last raiser stays open.
+            if not (starting and signal.key == "offline"):
+                self.apply(signal, now)
         guard = link.guard
         latched = bool(guard is not None and guard.latched)
         by = str(link._latch_msg.get("by") or link._pressed_by or "")

@@ -132,3 +132,36 @@ async def test_the_estop_raises_a_critical_alert_until_it_is_released(link, sim,
     await estop_release(user=operator, source="api", confirm=True)
     await alerts_frame(communicator, lambda on: "estop" not in on)
     await communicator.disconnect()
+
+
+def _offline_on(engine: alerts_engine.AlertEngine) -> bool:
+    return any(a["key"] == "offline" for a in engine.book.snapshot()["alerts"])
+
+
+def test_the_first_start_is_no_outage_until_the_robot_had_time_to_come_up():
+    from robot.link.connection import RobotLink
+    from robot.live.state import MemoryStore
+
+    link = RobotLink("ws://127.0.0.1:9", store=MemoryStore(), layer=None, request_queue="unused")
+    engine = alerts_engine.AlertEngine(link)
+    t0 = 1_000_000.0
+    for dt in (0.0, 3.0, 10.0, 25.0):  # a simulator still starting
+        engine.tick(t0 + dt)
+        assert not _offline_on(engine), dt
+    engine.tick(t0 + alerts_engine.FIRST_CONNECT_GRACE_S + 1)  # never came up: that is an outage
+    assert _offline_on(engine)
+
+
+def test_a_robot_that_was_connected_is_offline_after_the_blink_grace():
+    from robot.link.connection import RobotLink
+    from robot.live.state import MemoryStore
+
+    link = RobotLink("ws://127.0.0.1:9", store=MemoryStore(), layer=None, request_queue="unused")
+    engine = alerts_engine.AlertEngine(link)
+    link.connected = True
+    engine.tick(1_000_000.0)
+    link.connected = False
+    engine.tick(1_000_001.0)
+    assert not _offline_on(engine)
+    engine.tick(1_000_001.0 + alerts_engine.OFFLINE_GRACE_S + 0.5)
+    assert _offline_on(engine)
