@@ -27,8 +27,8 @@ _SEEN_KEY = "_seen"
 
 @receiver(user_logged_in)
 def _logged_in(sender: type, request: HttpRequest | None, user: Any, **kwargs: Any) -> None:
-    key = request.session.session_key if request is not None else None
-    if key:
+    if request is not None and request.session.session_key:
+        key = request.session.session_key
         SessionRecord.objects.update_or_create(session_key=key, defaults={
             "user": user, "address": request.META.get("REMOTE_ADDR", "")[:45],
             "user_agent": request.META.get("HTTP_USER_AGENT", "")[:300]})
@@ -83,7 +83,7 @@ def sessions_of(*, user: Any) -> list[SessionRecord]:
 
 def session_end(*, user: Any, record_id: Any, current_key: str) -> None:
     """End one of the person's other sessions (this one ends with Log out)."""
-    records = SessionRecord.objects.filter(user=user, pk=record_id if str(record_id).isdigit() else None)
+    records = SessionRecord.objects.filter(user=user, pk=int(record_id) if str(record_id).isdigit() else 0)
     if not records.exists():
         raise serializers.ValidationError("No such session of yours: it may have ended already.")
     if records.filter(session_key=current_key).exists():

@@ -8,6 +8,7 @@ from typing import Any
 
 from django.contrib.auth import update_session_auth_hash
 from django.contrib.auth.forms import PasswordChangeForm
+from django.contrib.auth.models import User
 from django.http import HttpRequest, HttpResponse
 from django.urls import reverse
 from django.views.decorators.http import require_POST
@@ -30,9 +31,14 @@ def _problem(exc: serializers.ValidationError) -> str:
     return " ".join(map(str, detail))
 
 
+def _person(request: HttpRequest) -> User:
+    assert isinstance(request.user, User)  # every page is behind LoginRequiredMiddleware
+    return request.user
+
+
 def _page(request: HttpRequest, *, notice: str = "", error: str = "", status: int | None = None,
           password_form: PasswordChangeForm | None = None, **extra: Any) -> HttpResponse:
-    user = request.user
+    user = _person(request)
     token = Token.objects.filter(user=user).first()
     choice = AlertChoice.objects.filter(user=user).first()
     response = render_safe(request, "dashboard/account.html", {
@@ -105,11 +111,11 @@ def account_token(request: HttpRequest) -> HttpResponse:
 
 @require_POST
 def account_password(request: HttpRequest) -> HttpResponse:
-    if not request.user.has_usable_password():
+    if not _person(request).has_usable_password():
         return _page(request, error="Your account signs in through single sign-on: it has no password here.")
     form = PasswordChangeForm(request.user, request.POST)
     if not form.is_valid():
-        problems = " ".join(message for errors in form.errors.values() for message in errors)
+        problems = " ".join(str(message) for errors in form.errors.values() for message in errors)
         return _page(request, error=f"Password not changed: {problems}", password_form=form)
     old_key = request.session.session_key or ""
     update_session_auth_hash(request, form.save())
