@@ -27,11 +27,21 @@ def verified_email_domain(claims: Mapping[str, Any]) -> str:
     return "@" + email.rpartition("@")[2].lower()
 
 
-def role_for(claims: Mapping[str, Any], config: SsoConfig) -> Role | None:
+def matched_role(claims: Mapping[str, Any], config: SsoConfig) -> Role | None:
+    """The highest role a rule gives, without the default."""
     values = claim_values(claims, config.role_claim)
     domain = verified_email_domain(claims)
     matched = [rule.role for rule in config.rules
                if (rule.match.lower() == domain if rule.by_email_domain else rule.match in values)]
-    if not matched:
-        return config.default_role
-    return max(matched, key=_RANK.__getitem__)
+    return max(matched, key=_RANK.__getitem__) if matched else None
+
+
+def role_for(claims: Mapping[str, Any], config: SsoConfig) -> Role | None:
+    return matched_role(claims, config) or config.default_role
+
+
+def absent_claims(claims: Mapping[str, Any], config: SsoConfig) -> list[str]:
+    """The claims a rule reads that the provider did not send at all (the role claim; the e-mail
+    when a rule matches by its domain)."""
+    read = [config.role_claim, *(["email"] if any(rule.by_email_domain for rule in config.rules) else [])]
+    return [name for name in read if name not in claims]

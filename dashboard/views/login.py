@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import requests
 from django import forms
 from django.contrib.auth import views as auth_views
 from django.contrib.auth.decorators import login_not_required
@@ -15,7 +16,8 @@ from django.urls import reverse
 from django.utils.http import url_has_allowed_host_and_scheme
 from django.views.decorators.cache import never_cache
 
-from dashboard.sso.client import REFUSALS, claims_from_callback, provider_logout_url, redirect_to_provider
+from dashboard.sso.claims import ClaimsRefused
+from dashboard.sso.client import REFUSALS, claims_from_callback, provider_logout_url, reason_of, redirect_to_provider
 from dashboard.sso.config import SsoConfig, sso_config
 from dashboard.sso.people import may_sign_in_with_password
 from dashboard.sso.signin import ID_TOKEN_KEY, Refusal, refuse, sign_in
@@ -83,15 +85,18 @@ def sso_callback(request: HttpRequest) -> HttpResponse:
     refusal: Refusal | None
     try:
         claims, id_token = claims_from_callback(config, request)
+    except requests.RequestException as exc:  # the provider away: nobody's fault at this address
+        refusal = refuse(request, {}, Refusal("provider_unreachable", f"{config.name} could not be reached "
+                                              f"({reason_of(exc)}). Try again in a minute."), counts=False)
     except REFUSALS as exc:
-        refusal = refuse(request, {}, Refusal("not_verified", f"The sign-in could not be verified ({_reason(exc)}). "
-                                                              "Start again from the login page."))
+        refusal = refuse(request, {}, Refusal("not_verified", f"The sign-in could not be verified ({reason_of(exc)}). "
+                                                              "Start again from the login page."), counts=True)
+    except ClaimsRefused as exc:
+        refusal = refuse(request, {}, Refusal("claims_refused", f"Your claims from {config.name} could not be "
+                                              f"completed: {exc.reason}."), counts=exc.forged)
     else:
         refusal = sign_in(request, config, claims, id_token)
     if refusal is not None:
-        return render(request, "registration/sso_refused.html", {"refusal": refusal, "sso": config}, status=403)
+        return render(request, "registration/sso_refused.html", {"refusal": refusal, "sso": config},
+                      status=refusal.status)
     return HttpResponseRedirect(request.session.pop(NEXT_KEY, "") or reverse("dashboard:home"))
-
-
-def _reason(exc: Exception) -> str:
-    return (str(getattr(exc, "description", "") or exc) or type(exc).__name__)[:200]

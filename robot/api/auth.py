@@ -1,4 +1,6 @@
-"""Token login for scripts: POST {username, password} -> {token}, throttled like the login form."""
+"""Token login for scripts: POST {username, password} -> {token}, throttled like the login form; with
+single sign-on required, a password gives one only to a break-glass account, and a signed-in session
+gets one for itself (an empty POST)."""
 
 from __future__ import annotations
 
@@ -7,10 +9,13 @@ from typing import Any
 from django.conf import settings
 from drf_spectacular.utils import extend_schema, inline_serializer
 from rest_framework import exceptions, serializers
+from rest_framework.authentication import SessionAuthentication
 from rest_framework.authtoken.views import ObtainAuthToken
 from rest_framework.request import Request
 from rest_framework.response import Response
 
+from dashboard.sso.config import sso_config
+from dashboard.sso.people import may_sign_in_with_password
 from robot.api.common import error_responses
 from robot.api.tokens import expires_at, token_for
 
@@ -32,9 +37,19 @@ class LockedOut(exceptions.Throttled):
         super().__init__(wait=settings.AXES_COOLOFF_TIME.total_seconds(), detail=lockout_message(flooded=flooded))
 
 
+class PasswordNotAccepted(exceptions.PermissionDenied):
+    default_code = "sso_required"
+
+    def __init__(self) -> None:
+        config = sso_config()
+        super().__init__(f"Sign in with {config.name if config else 'single sign-on'}: a password gives an API token "
+                         "only to a break-glass account. Get one from your account page, or POST here with an empty "
+                         "body from your signed-in session.")
+
+
 class TokenView(ObtainAuthToken):
-    # No session authentication, hence no CSRF check: scripts have no cookie to protect.
-    authentication_classes: list = []
+    # A session (with its CSRF check) only for one's own token; scripts send no cookie, so no CSRF check.
+    authentication_classes = [SessionAuthentication]
 
     @extend_schema(
         summary="Get an API token",
@@ -42,15 +57,20 @@ class TokenView(ObtainAuthToken):
                     "After `LOGIN_FAILURE_LIMIT` failures for one account or from one address, both are refused "
                     "(429, code `locked_out`) for `LOGIN_LOCKOUT_MINUTES`, even with the right password. "
                     "A token expires `API_TOKEN_DAYS` after it was made (`expires`; asking again then gives a "
-                    "new one) and dies with a password change.",
-        request=inline_serializer("TokenIn", {"username": serializers.CharField(),
-                                              "password": serializers.CharField()}),
+                    "new one) and dies with a password change. With `SSO_REQUIRED=true` a password gives a token "
+                    "only to a break-glass account (403, code `sso_required`); a signed-in session (cookie and "
+                    "`X-CSRFToken`) gets its own with an empty body.",
+        request=inline_serializer("TokenIn", {"username": serializers.CharField(required=False),
+                                              "password": serializers.CharField(required=False)}),
         responses={200: inline_serializer("TokenOut", {"token": serializers.CharField(),
                                                        "expires": serializers.DateTimeField(allow_null=True)}),
-                   **error_responses(400, 429)},
+                   **error_responses(400, 403, 429)},
         tags=["auth"],
     )
     def post(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        if request.user.is_authenticated and not request.data:
+            token = token_for(request.user)
+            return Response({"token": token.key, "expires": expires_at(token)})
         serializer = self.get_serializer(data=request.data)
         try:
             serializer.is_valid(raise_exception=True)
@@ -59,5 +79,8 @@ class TokenView(ObtainAuthToken):
             if getattr(request, "axes_locked_out", False):
                 raise LockedOut(flooded=getattr(request, "login_flooded", False)) from None
             raise
-        token = token_for(serializer.validated_data["user"])
+        user = serializer.validated_data["user"]
+        if not may_sign_in_with_password(user):
+            raise PasswordNotAccepted()
+        token = token_for(user)
         return Response({"token": token.key, "expires": expires_at(token)})

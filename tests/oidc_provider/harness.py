@@ -141,6 +141,13 @@ class OidcProvider:
         """``username``'s ``groups`` claim from the next login on."""
         self._control("POST", f"users/{username}/groups", body=groups)
 
+    def claims_at(self, where: str) -> None:
+        """Where e-mail and groups are given from the next login on: ``id_token`` (the default, and at
+        userinfo too), ``userinfo`` (only there), ``distributed`` (groups at a source the claims name, with
+        an access token for it), ``pointer_only`` (groups only pointed at, without an access token, as
+        Entra ID does past 200 groups) or ``userinfo_other_sub`` (only at userinfo, for another subject)."""
+        self._control("POST", "claims-at", body={"where": where})
+
     def misbehave(self, mischief: str) -> None:
         """The token endpoint's next ID token is broken: ``tampered`` (a claim changed after signing),
         ``wrong_audience``, ``wrong_issuer``, ``expired``, ``wrong_nonce``, ``unknown_key`` (signed by a key never

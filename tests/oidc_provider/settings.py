@@ -18,7 +18,8 @@ HERE = Path(__file__).resolve().parent
 DATA = Path(os.environ["OIDC_PROVIDER_DATA"])
 PORT = int(os.environ["OIDC_PROVIDER_PORT"])
 SPEC = json.loads((DATA / "spec.json").read_text())
-ISSUER = f"http://127.0.0.1:{PORT}/o"
+BASE_URL = f"http://127.0.0.1:{PORT}"
+ISSUER = f"{BASE_URL}/o"
 
 
 def new_rsa_pem() -> str:

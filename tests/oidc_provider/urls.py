@@ -1,6 +1,7 @@
 """URLs of the tests' OpenID Connect provider: DOT under ``/o/``, the login form, and the control
 endpoints under ``/test/`` that only this provider has (key rotation, the signing keys, a user's
-groups, and a token endpoint that misbehaves once, as a forged or broken provider answer would)."""
+groups, where the claims are given, a distributed claims' source, and a token endpoint that
+misbehaves once, as a forged or broken provider answer would)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import time
 from collections.abc import Callable
 
 from django.conf import settings
+from django.contrib.auth import get_user_model
 from django.contrib.auth.views import LoginView
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.urls import include, path
@@ -23,6 +25,7 @@ from oauth2_provider.utils import jwk_from_pem
 from oauth2_provider.views import TokenView
 
 from tests.oidc_provider.settings import new_rsa_pem
+from tests.oidc_provider.validator import source_token
 
 _rotation = threading.Lock()
 
@@ -68,6 +71,36 @@ def set_groups(request: HttpRequest, username: str) -> HttpResponse:
     user = next(user for user in settings.SPEC["users"] if user["username"] == username)
     user["groups"] = json.loads(request.body)
     return JsonResponse({"groups": user["groups"]})
+
+
+CLAIMS_AT = ("id_token", "userinfo", "distributed", "pointer_only", "userinfo_other_sub")
+
+
+@_controlled
+@require_POST
+def set_claims_at(request: HttpRequest) -> HttpResponse:
+    """Where e-mail and groups are given from now on (the body's ``where``, one of ``CLAIMS_AT``)."""
+    where = json.loads(request.body)["where"]
+    if where not in CLAIMS_AT:
+        return JsonResponse({"error": f"where is one of {CLAIMS_AT}"}, status=400)
+    settings.SPEC["claims_at"] = where
+    return JsonResponse({"where": where})
+
+
+@require_GET
+def claims_source(request: HttpRequest, username: str) -> HttpResponse:
+    """A distributed claims' source (OpenID Connect Core 5.6.2): the user's groups as a JWT signed
+    with the active key, for the access token the claims named."""
+    given = request.headers.get("Authorization", "").removeprefix("Bearer ")
+    if not hmac.compare_digest(given.encode(), source_token(username).encode()):
+        return JsonResponse({"error": "invalid_token"}, status=401)
+    profile = next(user for user in settings.SPEC["users"] if user["username"] == username)
+    subject = str(get_user_model().objects.get(username=username).pk)
+    key = jwk_from_pem(oauth2_settings.OIDC_RSA_PRIVATE_KEY)
+    token = jwt.JWT(header={"alg": "RS256", "kid": key.thumbprint()},
+                    claims={"iss": settings.ISSUER, "sub": subject, "groups": list(profile["groups"])})
+    token.make_signed_token(key)
+    return HttpResponse(token.serialize(), content_type="application/jwt")
 
 
 MISCHIEF = ("tampered", "wrong_audience", "wrong_issuer", "expired", "wrong_nonce", "unknown_key", "no_id_token")
@@ -144,5 +177,7 @@ urlpatterns = [
     path("test/keys", keys),
     path("test/users/<str:username>/groups", set_groups),
     path("test/misbehave", misbehave),
+    path("test/claims-at", set_claims_at),
+    path("test/claims-source/<str:username>", claims_source),
     path("", home),
 ]

@@ -1,6 +1,7 @@
 """Signing in through a real OpenID provider (the tests' own, a process of its own): the roles its
-groups give, refusals of people without a role and of every broken or forged answer, rotated keys,
-a lockout, and logging out at both ends. The browser is Django's test client on this side and a
+groups give, wherever it puts them (ID token, userinfo, distributed claims), refusals of people
+without a role and of every broken or forged answer, rotated keys, a lockout that only forged
+answers lead to, and logging out at both ends. The browser is Django's test client on this side and a
 ``requests`` session at the provider."""
 
 from __future__ import annotations
@@ -10,10 +11,13 @@ import urllib.parse
 
 import pytest
 import requests
+from axes.models import AccessAttempt
+from django.core.cache import cache
 from django.test import Client
 
 from cyborg_site.roles import Role, role_of
 from robot.models import AuditEntry
+from tests.conftest import PASSWORD
 from tests.oidc_provider.harness import OidcProvider, ProviderUser
 
 pytestmark = pytest.mark.django_db
@@ -24,6 +28,8 @@ USERS = [
     ProviderUser("kari", "kari-pw", groups=["cyborg-operators", "students"], email="kari@ntnu.no"),
     ProviderUser("vera", "vera-pw", groups=["cyborg-viewers"], email="vera@ntnu.no"),
     ProviderUser("nils", "nils-pw", groups=["students"], email="nils@ntnu.no"),
+    *(ProviderUser(f"student{n}", f"student{n}-pw", groups=["students"], email=f"student{n}@ntnu.no")
+      for n in range(10)),
 ]
 
 
@@ -40,6 +46,9 @@ def sso(settings, provider):
     settings.OIDC_ISSUER = provider.issuer
     settings.OIDC_CLIENT_ID, settings.OIDC_CLIENT_SECRET = "cyborg", "s3cret-of-the-client"
     settings.OIDC_ROLES, settings.OIDC_NAME = ROLES, "Feide"
+    cache.clear()  # refused identities are throttled there
+    yield
+    provider.claims_at("id_token")
 
 
 class Person:
@@ -202,3 +211,97 @@ def test_logging_out_ends_the_providers_session_too(provider):
     # Signing in again asks for the password at the provider: its session ended too.
     again = kari.at_provider.get(kari.to_provider(), allow_redirects=False, timeout=10)
     assert "/accounts/login/" in again.headers["Location"]
+
+
+def _signed_in_as(person: Person) -> tuple[str, str, Role | None]:
+    user = person.site.get("/").wsgi_request.user
+    if not user.is_authenticated:
+        return "", "", None
+    return user.username, user.email, role_of(user)
+
+
+@pytest.mark.parametrize("where", ["id_token", "userinfo", "distributed"])
+def test_the_groups_and_e_mail_are_read_wherever_the_provider_puts_them(provider, where):
+    provider.claims_at(where)
+    kari = Person(provider, "kari")
+    assert kari.sign_in().status_code == 302, where
+    assert _signed_in_as(kari) == ("kari", "kari@ntnu.no", Role.OPERATOR)
+    assert _last_sso_audit().outcome == "signed in as operator"
+
+
+def test_a_userinfo_answer_for_another_subject_is_refused_and_counts_as_forged(provider):
+    provider.claims_at("userinfo_other_sub")
+    kari = Person(provider, "kari")
+    answer = kari.sign_in()
+    assert answer.status_code == 403
+    assert "userinfo answer is for another subject" in answer.content.decode()
+    assert _signed_in_as(kari)[2] is None
+    entry = _last_sso_audit()
+    assert entry.error_code == "claims_refused" and "another subject" in entry.outcome
+    assert AccessAttempt.objects.filter(ip_address="127.0.0.1").exists()
+
+
+def test_groups_only_pointed_at_without_a_token_are_refused_with_the_reason(provider):
+    """(Microsoft Entra ID past 200 groups.) Not the address's fault: it does not count toward its lockout."""
+    provider.claims_at("pointer_only")
+    kari = Person(provider, "kari")
+    answer = kari.sign_in()
+    assert answer.status_code == 403
+    page = answer.content.decode()
+    assert "only as a link" in page and "Entra ID does past 200 groups" in page
+    assert _last_sso_audit().error_code == "claims_refused"
+    assert not AccessAttempt.objects.exists()
+
+
+def test_a_role_claim_the_provider_never_sends_is_named_in_the_audit_and_on_the_page(provider, settings):
+    settings.OIDC_ROLE_CLAIM = "roles"  # this provider sends "groups" only
+    refused = Person(provider, "kari").sign_in()
+    assert refused.status_code == 403
+    assert "Feide sent no &#x27;roles&#x27; claim" in refused.content.decode()
+    assert "sent no 'roles' claim" in _last_sso_audit().outcome
+    settings.OIDC_DEFAULT_ROLE = "viewer"
+    kari = Person(provider, "kari")
+    assert kari.sign_in().status_code == 302
+    entry = _last_sso_audit()
+    assert entry.ok and entry.outcome.startswith("signed in as viewer, the default role: Feide sent no 'roles' claim")
+    page = kari.site.get("/")
+    assert role_of(page.wsgi_request.user) == Role.VIEWER
+    notice = "You are signed in as viewer, the default role: Feide sent no &#x27;roles&#x27; claim"
+    assert notice in page.content.decode()
+
+
+def test_people_in_no_mapped_group_do_not_lock_out_their_address(provider, settings, admin_user):
+    """Ten students behind one campus address: each refused and audited, none counted against the
+    address; the operators and the break-glass admin still get in from there."""
+    for n in range(10):
+        answer = Person(provider, f"student{n}").sign_in()
+        assert answer.status_code == 403, n
+        assert "is not in a group that may use the Cyborg" in answer.content.decode()
+    assert AuditEntry.objects.filter(action="login.sso", error_code="no_role").count() == 10
+    kari = Person(provider, "kari")
+    assert kari.sign_in().status_code == 302
+    assert _signed_in_as(kari)[2] == Role.OPERATOR
+    speech = kari.site.post("/api/robot/speech/", {"text": "hello"}, content_type="application/json")
+    assert speech.status_code not in (401, 403, 429)  # past the role check (the E-STOP: tests/browser/test_sso.py)
+    token = Client().post("/api/auth/token/", {"username": admin_user.username, "password": PASSWORD},
+                          content_type="application/json")
+    assert token.status_code == 200, token.content
+
+
+def test_one_person_refused_again_and_again_is_throttled_not_their_address(provider, settings):
+    for _ in range(settings.AXES_FAILURE_LIMIT):
+        assert Person(provider, "nils").sign_in().status_code == 403
+    again = Person(provider, "nils").sign_in()
+    assert again.status_code == 429 and "refused here too often" in again.content.decode()
+    assert _last_sso_audit().error_code == "throttled"
+    assert Person(provider, "vera").sign_in().status_code == 302
+
+
+def test_forged_answers_still_lock_out_the_address(provider, settings):
+    for _ in range(settings.AXES_FAILURE_LIMIT):
+        kari = Person(provider, "kari")
+        callback = kari.at_the_provider(kari.to_provider())
+        provider.misbehave("tampered")
+        assert kari.site.get(callback).status_code in (403, 429)  # 429: the one that locks the address
+    answer = Person(provider, "vera").sign_in()
+    assert answer.status_code == 429 and "Too many failed logins" in answer.content.decode()
