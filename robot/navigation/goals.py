@@ -13,6 +13,7 @@ import uuid
 from typing import Any
 
 from robot import interface as ri
+from robot.commands.motors import ensure_motors_on
 from robot.commands.pipeline import Command, arun
 from robot.link.bus import apublish, arequest
 from robot.live.announce import aget_state, apublish_state
@@ -67,6 +68,7 @@ async def apublish_action(action_key: str, suffix: str, msg: dict[str, Any]) -> 
 async def astart_goal(*, action: str, msg: dict[str, Any], goal_id: str, user: Any, x: float, y: float, yaw: float,
                       location: str | None = None) -> dict[str, Any]:
     """Send an action goal and make it the current goal for every watcher (input already checked)."""
+    await ensure_motors_on("a navigation goal")
     await apublish_action(action, "goal", msg)
     goal = {"id": goal_id, "action": action, "x": x, "y": y, "yaw": yaw, "location": location,
             "by": user.get_username() if user is not None else "", "sent": time.time(), "cancel_requested": False}

@@ -4,8 +4,10 @@ client → server: {"type": "input", "linear", "angular", "max_linear", "max_ang
 | "acquire" | "takeover" (admins) | "unlock"
 server → client: {"type": "lock", "holder", "you"} | {"type": "commanded", "linear", "angular"}
 | {"type": "error", "message", "code"} | {"type": "estop", "latched", "message", "by", "at"}
+| {"type": "notice", "message", "code"} (e.g. an admin took over from this driver)
 
-While the E-STOP is latched every input, lock request and takeover is refused (code "estop").
+While the E-STOP is latched every input, lock request and takeover is refused (code "estop"); while
+the motors are off every moving input is refused (code "motors_off").
 
 Viewers may connect to see who drives; everything that would move the robot is refused.
 """
@@ -19,6 +21,7 @@ from typing import Any
 from django.conf import settings
 
 from robot.commands.latch import alatch
+from robot.commands.motors import MotorsOff, ensure_motors_on
 from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
 from robot.link.bus import EstopEngaged, RobotError
 from robot.live.locks import HeldLock, Holder
@@ -76,6 +79,9 @@ class Driver:
             self._cancel_expiry()
             if event["reason"] == "estop":  # the stop published zero for us
                 await self.send({"type": "commanded", "linear": 0.0, "angular": 0.0, "reason": "estop"})
+        if self.holding and not mine and event["reason"] == "takeover":
+            await self.send({"type": "notice", "code": "takeover",
+                             "message": f"{event['holder']} took over driving: the robot was stopped."})
         self.holding = mine
         await self._send_lock(event["holder"], mine)
         if event["reason"] in ("estop", "estop_release"):
@@ -91,6 +97,8 @@ class Driver:
         except InvalidInput as exc:
             raise InvalidCommand(str(exc)) from None
         self._cancel_expiry()
+        if not command.is_zero:
+            await self._refuse_if_motors_off()
         if not self.holding:
             await self._refuse_if_latched()
             await self._take_free_lock()
@@ -145,6 +153,14 @@ class Driver:
         if latch.latched:
             await self._refuse(("estop", latch.at), EstopEngaged(f"{latch.message}; driving is blocked until "
                                                                  "an operator releases it."))
+
+    async def _refuse_if_motors_off(self) -> None:
+        """Motors off, a move goes nowhere: stop what this driver sent and say why (audited once)."""
+        try:
+            await ensure_motors_on("driving")
+        except MotorsOff as exc:
+            await self.session.halt()
+            await self._refuse("motors_off", exc)
 
     async def _refuse(self, reason: object, error: RobotError) -> None:
         if self._refused != reason:

@@ -12,9 +12,10 @@ from cyborg_site.roles import is_admin
 from robot.commands.audit import audit_record
 from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, arun_command
-from robot.link.bus import EstopEngaged, RobotError
-from robot.live.groups import LOCK_GROUP
+from robot.link.bus import EstopEngaged, RobotError, RobotNotResponding
+from robot.live.groups import LOCK_GROUP, STATUS_KEY
 from robot.live.locks import HeldLock, Holder
+from robot.live.state import get_store, status_view
 from robot.teleop.lock import get_lock
 from robot.teleop.session import publish_cmd_vel
 from robot.teleop.twist import STOP
@@ -40,6 +41,7 @@ async def lock_acquire(*, user: Any, me: Holder, lock: HeldLock | None = None) -
     lock = lock or get_lock()
 
     async def run() -> str:
+        await _refuse_if_not_responding()
         current = await lock.acquire(me)
         if current != me:
             raise Busy(f"{current.username} is driving.")
@@ -70,6 +72,13 @@ async def lock_takeover(*, user: Any, me: Holder, lock: HeldLock | None = None) 
 
     await arun_command(user=user, source="websocket", action="teleop.takeover", params={}, run=run, allowed=is_admin,
                        refusal="Only admins may take over the drive lock.")
+
+
+async def _refuse_if_not_responding() -> None:
+    """A hung robot takes no moves: the lock to make them is not handed out either (the page offers none)."""
+    view = status_view((await get_store().aget_many([STATUS_KEY])).get(STATUS_KEY))
+    if view["robot_connected"] and not view["responding"]:
+        raise RobotNotResponding("Robot not responding: the drive lock is given once it answers again.")
 
 
 async def _give_back_if_latched(lock: HeldLock, me: Holder) -> None:

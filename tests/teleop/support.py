@@ -14,9 +14,9 @@ from tests.helpers import async_wait_until, receive_until, ws_communicator
 async def drive_socket(user) -> Any:
     """A connected ``/ws/teleop/`` communicator that has read its first lock frame."""
     communicator = ws_communicator(user, "/ws/teleop/")
-    connected, _ = await communicator.connect()
+    connected, _ = await communicator.connect(timeout=10)  # a loaded machine is slow to accept
     assert connected
-    frame = await communicator.receive_json_from(timeout=5)
+    frame = await communicator.receive_json_from(timeout=10)
     assert frame["type"] == "lock"
     return communicator
 
