@@ -83,6 +83,7 @@ def test_a_person_confirms_their_address_makes_and_revokes_a_token_ends_a_sessio
         page.click("#menu-btn")
     page.locator("nav.mainnav").get_by_role("link", name="Account").click()
     page.wait_for_url(f"{url}/account/")
+    expect(page.locator(".menu-current")).to_have_text("Account")
 
     with fresh_page(browser) as elsewhere:
         login(elsewhere, mail_stack, person, next_path="/account/")
