@@ -23,6 +23,8 @@ pytestmark = pytest.mark.browser
 PAGES = {"/": "Dashboard", "/map/": "Map", "/drive/": "Drive", "/topics/": "Topics",
          "/statemachine/": "State machine", "/diagnostics/": "Diagnostics", "/history/": "History",
          "/activity/": "Activity"}
+# Ours but reached from the History page rather than the navigation.
+HISTORY_PAGES = ("/history/replay/", "/history/incidents/")
 # Linked from every page's navigation but not ours: the API's Swagger UI and Django's admin.
 OTHER_PAGES = {"/api/docs/": "API", "/admin/": "Admin"}
 # The pages of those that operators use, each with the navigation entry it belongs to; they get the
@@ -34,18 +36,24 @@ THEIR_PAGES = {
     "/admin/robot/location/add/": "Admin",
     "/admin/history/topicpolicy/": "Admin",
 }
-# A row in each list (the stack starts with none), removed afterwards.
+# A row in each list (the stack starts with none), removed afterwards; an incident with a long summary
+# (it names an option of Replay's incident list and a row of the Incidents table).
 SEED_ROWS = """
-from history.models import TopicPolicy
+import time
+from history.models import Incident, TopicPolicy
 from robot.models import Location
+Incident.objects.update_or_create(by="layout_check", defaults={"kind": "manual", "t": time.time() - 60,
+    "start": time.time() - 120, "end": time.time() - 30, "complete": True, "driver": "a_driver_with_a_long_name",
+    "summary": "the robot stopped in the doorway of the east wing while a trolley passed, and then turned round"})
 Location.objects.update_or_create(name="layout_check_desk", defaults={"x": 1.5, "y": -2.25, "yaw": 1.2,
                                   "description": "a place with a long description to fill the row"})
 TopicPolicy.objects.update_or_create(topic="/layout_check/a_rather_long_topic_name/with_parts",
                                      defaults={"msg_type": "std_msgs/String", "mode": "off"})
 """
 DROP_ROWS = """
-from history.models import TopicPolicy
+from history.models import Incident, TopicPolicy
 from robot.models import Location
+Incident.objects.filter(by="layout_check").delete()
 Location.objects.filter(name="layout_check_desk").delete()
 TopicPolicy.objects.filter(topic__startswith="/layout_check/").delete()
 """
@@ -106,10 +114,10 @@ def test_every_page_runs_without_errors_on_one_live_socket(sized_page, stack):
     assert errors == []
 
 
-def test_every_page_fits_the_screen_and_no_control_is_covered_even_by_a_notice(sized_page, stack):
+def test_every_page_fits_the_screen_and_no_control_is_covered_even_by_a_notice(sized_page, stack, rows):
     page = sized_page
     login(page, stack, "ada")
-    for path in [*our_pages(page, stack), "/accounts/login/"]:
+    for path in [*our_pages(page, stack), *HISTORY_PAGES, "/accounts/login/"]:
         if path == "/accounts/login/":
             page.context.clear_cookies()
         page.goto(f"{stack.url}{path}")
@@ -207,7 +215,7 @@ def test_the_header_menu_opens_and_closes_on_a_phone(browser, stack):
 def test_the_estop_is_on_every_page_on_screen_clickable_and_clear_of_every_control(sized_page, stack, rows):
     page = sized_page
     login(page, stack, "ada")
-    for path in [*our_pages(page, stack), *THEIR_PAGES]:
+    for path in [*our_pages(page, stack), *HISTORY_PAGES, *THEIR_PAGES]:
         if path in THEIR_PAGES:
             open_their_page(page, stack, path)
         else:
@@ -218,3 +226,15 @@ def test_the_estop_is_on_every_page_on_screen_clickable_and_clear_of_every_contr
         assert page.evaluate(HORIZONTAL_OVERFLOW) <= 0, f"{path} scrolls sideways at {page.viewport['width']} px"
         assert page.evaluate(ESTOP_CLEAR) == [], path
         assert "{#" not in page.locator("body").inner_text(), f"{path} shows a template comment"
+
+
+def test_the_alerts_page_shows_its_history_first_and_its_settings_at_a_readable_width(browser, stack):
+    with fresh_page(browser, viewport={"width": 1366, "height": 800}) as page:
+        login(page, stack, "olga", next_path="/alerts/")
+        history = page.locator("#alert-history").bounding_box()
+        assert history["y"] < 800, f"the alert history starts at {history['y']} px, below the first screen"
+        main = page.locator("main.page").bounding_box()
+        settings = page.locator("#alert-delivery").bounding_box()
+        # A form reads at about 40 characters' width and more; a quarter of a laptop's screen squeezes it.
+        assert settings["width"] >= 0.4 * main["width"], (settings["width"], main["width"])
+        assert page.locator("#alert-history-card").bounding_box()["width"] >= 0.95 * main["width"] - 40
