@@ -20,8 +20,14 @@ stop() {
   exit "$1"
 }
 trap 'stop 0' INT TERM
-# Either one ending on its own (a port in use, a crash) ends the other, and says so.
+# The server ending on its own (a port in use, a crash) ends the simulator, and says so. The simulator
+# ending does not end the server: it keeps running and shows the robot offline, as with a real robot.
 wait -n "$web" "$sim"
 status=$?
-echo "run.sh: the $(kill -0 "$web" 2>/dev/null && echo simulator || echo server) stopped (status $status)" >&2
+if kill -0 "$web" 2>/dev/null; then
+  echo "run.sh: the simulator stopped (status $status); the server keeps running (Ctrl-C stops it)" >&2
+  wait "$web"
+  status=$?
+fi
+echo "run.sh: the server stopped (status $status)" >&2
 stop "$status"

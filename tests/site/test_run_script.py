@@ -54,3 +54,57 @@ def test_a_ctrl_c_stops_the_simulator_and_the_server_cleanly():
     # No CRITICAL Twisted traceback from the link's reconnect timer, no stack of a task the stop ended.
     assert "can't connect in this state" not in text and "CRITICAL" not in text, text[-4000:]
     assert "CancelledError" not in text, text[-4000:]
+
+
+def _child_running(parent: int, word: str) -> int:
+    """The pid of ``parent``'s child whose command line has ``word``."""
+    for task in Path(f"/proc/{parent}/task").iterdir():
+        for pid in (task / "children").read_text().split():
+            if word in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
+                return int(pid)
+    raise AssertionError(f"no child of {parent} runs {word}")
+
+
+def _robot_connected(web: int) -> bool | None:
+    import urllib.error
+    import urllib.request
+
+    try:
+        with urllib.request.urlopen(f"http://127.0.0.1:{web}/healthz", timeout=2) as res:
+            body = res.read()
+    except urllib.error.HTTPError as err:  # 503 while the robot is offline
+        body = err.read()
+    except OSError:
+        return None
+    return b'"connected": true' in body
+
+
+def test_the_server_keeps_running_when_the_simulator_dies():
+    var = tempfile.mkdtemp(prefix="cyborg-run-")
+    env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")} | {"VAR_DIR": var}
+    subprocess.run([sys.executable, "manage.py", "migrate", "--noinput"], cwd=ROOT, env=env, check=True,
+                   capture_output=True)
+    web, sim, video = free_port(), free_port(), free_port()
+    out = Path(var) / "run.log"
+    with out.open("w") as log:
+        run = subprocess.Popen(["bash", "scripts/run.sh", BIN, str(web), str(sim), str(video),
+                                f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
+                               cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            wait_for_port(web, 60, run)
+            deadline = time.monotonic() + 60
+            while not _robot_connected(web) and time.monotonic() < deadline:
+                time.sleep(0.2)
+            assert _robot_connected(web), out.read_text()[-3000:]
+            os.kill(_child_running(run.pid, "simrobot"), signal.SIGKILL)  # the simulator crashes
+            deadline = time.monotonic() + 60
+            while _robot_connected(web) is not False and time.monotonic() < deadline:
+                time.sleep(0.2)
+            assert _robot_connected(web) is False, out.read_text()[-3000:]  # up, and says the robot is offline
+            assert run.poll() is None and "the server keeps running" in out.read_text()
+            os.killpg(run.pid, signal.SIGINT)  # Ctrl-C still stops everything
+            assert run.wait(30) == 0, out.read_text()[-3000:]
+        finally:
+            if run.poll() is None:
+                os.killpg(run.pid, signal.SIGKILL)
+    assert not _listening(web) and not _listening(sim) and not _listening(video)
