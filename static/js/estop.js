@@ -41,10 +41,13 @@ async function engage() {
 
 // Never disabled while a press is under way: pressing again is always allowed.
 button?.addEventListener("click", engage);
+// Esc with a dialog open (the shortcut help, any other) closes that dialog and nothing else.
 document.addEventListener("keydown", (ev) => {
   if (ev.key !== SHORTCUT || ev.repeat) return;
   ev.preventDefault();
-  engage();
+  const dialog = [...document.querySelectorAll("dialog[open]")].pop();
+  if (dialog) dialog.close();
+  else engage();
 }, { capture: true });
 
 release?.addEventListener("click", async () => {

@@ -1,7 +1,7 @@
 // The keyboard-shortcut help on "?": every page lists the keys it answers to (what the page shows
 // decides: the drive card, the talk button, the state-machine graph, the E-STOP button).
 const PAGE_KEYS = [
-  { when: "#estop-btn", keys: [["Esc", "E-STOP: stop the robot (on every page)"]] },
+  { when: "#estop-btn", keys: [["Esc", "E-STOP: stop the robot (on every page; with a dialog open, such as this one, Esc closes the dialog)"]] },
   { when: "#drive[data-can-drive=true]", keys: [
     ["W or ↑", "drive forward (hold)"], ["S or ↓", "drive backward (hold)"],
     ["A or ←", "turn left (hold)"], ["D or →", "turn right (hold)"],

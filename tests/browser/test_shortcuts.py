@@ -51,3 +51,31 @@ def test_a_viewer_is_not_offered_the_estop_or_driving_keys(browser, stack):
         login(page, stack, "vera", next_path="/drive/")
         text = help_text(page)
         assert "E-STOP" not in text and "drive forward" not in text and "?" in text
+
+
+def test_esc_in_the_help_closes_it_and_leaves_the_estop_released(page, stack):
+    login(page, stack, "otto")
+    latched = lambda: page.request.get(f"{stack.url}/api/robot/estop/").json()["latched"]  # noqa: E731
+    assert not latched()
+    page.keyboard.press("?")
+    dialog = page.locator("#shortcuts")
+    expect(dialog).to_be_visible()
+    assert "stop the robot" in dialog.inner_text() and "Esc" in dialog.inner_text()
+    page.keyboard.press("Escape")
+    expect(dialog).to_be_hidden()
+    # A press would have marked the button at once (it is pressed in the key's own handler).
+    button = page.locator("#estop-btn")
+    assert button.get_attribute("aria-busy") is None and button.get_attribute("data-result") is None
+    page.wait_for_load_state("networkidle")
+    assert not latched()
+    expect(page.locator("#estop-banner")).to_be_hidden()
+
+    # With no dialog open, Esc is the E-STOP again.
+    token = next(c["value"] for c in page.context.cookies() if c["name"] == "csrftoken")
+    try:
+        page.keyboard.press("Escape")
+        expect(page.locator("#estop-banner")).to_be_visible()
+        assert latched()
+    finally:
+        for path, body in (("/api/robot/estop/release/", {"confirm": True}), ("/api/robot/motors/", {"enabled": True})):
+            page.request.post(f"{stack.url}{path}", data=body, headers={"X-CSRFToken": token})
