@@ -1,20 +1,21 @@
 // The plots page: downsampled series from the history API drawn with uPlot
 // (mean line, min/max band so spikes stay visible; zooming fetches finer buckets),
-// text topics as a table of messages, presets, state timeline, exports.
+// text topics as a table of messages, presets, state timeline (zoomed the same way), exports.
 import { getJSON, notify } from "./api.js";
 import { readConfig } from "./config.js";
 import { formatDuration, formatTime, parseSiteTime, toSiteInput, zone, zoneLabel } from "./time.js";
 import { timeTicks, valueLabel } from "./plotaxes.js";
-import { renderTimeline } from "./timeline.js";
+import { dragToZoom, renderTimeline } from "./timeline.js";
 
 const config = readConfig("history-config");
 const $ = (id) => document.getElementById(id);
 const RANGES = { hour: 3600, day: 86400, week: 7 * 86400 };
 const COLORS = ["#2563eb", "#dc2626", "#059669", "#d97706", "#7c3aed"];
 const TABLE = "@messages"; // the Field choice that shows a topic's messages as a table
+const TIMELINE = "@timeline"; // the state topic's Field choice that shows the state timeline
 const MESSAGES_LIMIT = 500;
 let chart = null;
-let shown = null; // what the chart shows: {topic, fields, opts}
+let shown = null; // what the chart shows: {topic, fields, opts}, or the timeline: {timeline: true}
 
 function fillTopics(selected) {
   const topics = $("topic");
@@ -29,8 +30,11 @@ function fillFields(selected) {
   const options = fields.map((f) => new Option(f, f));
   const text = topic && (topic.text || !fields.length);
   if (text) options.unshift(new Option("messages (table)", TABLE));
+  const states = topic?.topic === config.state_topic;
+  if (states) options.unshift(new Option("state timeline", TIMELINE));
   $("field").replaceChildren(...options);
-  if (selected && (fields.includes(selected) || selected === TABLE)) $("field").value = selected;
+  if (selected && (fields.includes(selected) || selected === TABLE || selected === TIMELINE)) $("field").value = selected;
+  else if (states) $("field").value = TIMELINE;
   else if (text) $("field").value = TABLE;
 }
 
@@ -39,10 +43,10 @@ function showView(name) {
   for (const view of ["chart", "timeline", "messages"]) $(view).hidden = view !== name;
   if (name !== "chart") {
     if (chart) { chart.destroy(); chart = null; }
-    shown = null;
+    shown = name === "timeline" ? { timeline: true } : null;
   }
   $("zoom-out").hidden = true;
-  $("zoom-hint").hidden = name !== "chart";
+  $("zoom-hint").hidden = name === "messages";
 }
 
 function range() {
@@ -229,17 +233,19 @@ async function messages(topic) {
   }
 }
 
-async function timeline() {
-  const r = range();
+// The timeline of the chosen range, or of a stretch of it picked by a drag (zoomed).
+async function timeline(r = range(), zoomed = false) {
   try {
-    const data = await getJSON(`${config.urls.timeline}?${new URLSearchParams(r)}`);
+    const data = await getJSON(`${config.urls.timeline}?${new URLSearchParams({ start: r.start, end: r.end })}`);
     showView("timeline");
     const parts = { bar: $("timeline-bar"), axisEl: $("timeline-axis"), detail: $("timeline-detail"),
       rows: $("timeline-rows"), caption: $("timeline-caption") };
     const { total, states } = renderTimeline(parts, data);
+    $("zoom-out").hidden = !zoomed;
     $("plot-info").textContent = states.length
-      ? `State machine, ${formatDuration(total)} recorded in this range (time without any recording is left out)`
-      : "No recorded state changes in this range.";
+      ? `State machine, ${formatDuration(total)} recorded in this ${zoomed ? "stretch (zoomed)" : "range"}`
+        + " (time without any recording is left out)"
+      : `No recorded state changes in this ${zoomed ? "stretch" : "range"}.`;
   } catch (err) {
     notify(err.message, "error");
   }
@@ -285,10 +291,15 @@ $("plot-form").addEventListener("submit", (ev) => {
     notify(err.message, "warn");
     return;
   }
-  if (field === TABLE || !field) messages(topic);
+  if (field === TIMELINE) timeline();
+  else if (field === TABLE || !field) messages(topic);
   else plot(topic, [field]);
 });
-$("zoom-out").addEventListener("click", () => shown && plot(shown.topic, shown.fields, shown.opts));
+$("zoom-out").addEventListener("click", () => {
+  if (shown?.timeline) timeline();
+  else if (shown) plot(shown.topic, shown.fields, shown.opts);
+});
+dragToZoom($("timeline-bar"), (start, end) => timeline({ start, end }, true));
 document.querySelectorAll("[data-preset]").forEach((btn) => btn.addEventListener("click", () => preset(btn.dataset.preset)));
 document.querySelectorAll("[data-format]").forEach((a) => a.addEventListener("click", (ev) => {
   ev.preventDefault();

@@ -1,6 +1,6 @@
 // The state-machine timeline: one bar on a time axis (the site's zone, 24-hour), each state in a
 // colour of its own (no two states share one), a tooltip and a tap readout per stretch, and a table
-// of time, share and how often each state was entered.
+// of time, share and how often each state was entered; a sideways drag across it zooms, as on the plots.
 import { formatDuration, formatTime, zoneLabel } from "./time.js";
 
 // The robot's states (ROBOT_INTERFACE.md) keep their colour from one view to the next.
@@ -70,6 +70,8 @@ export function renderTimeline({ bar, axisEl, detail, rows, caption }, data) {
   const total = Object.values(data.totals).reduce((a, b) => a + b, 0);
   const states = Object.keys(data.totals).sort((a, b) => data.totals[b] - data.totals[a]);
   const colors = stateColors(states);
+  bar.dataset.start = String(data.start);
+  bar.dataset.end = String(data.end);
   const describe = (seg) => `${seg.state}: ${formatTime(seg.start)} – ${formatTime(seg.end, { date: false })}`
     + ` ${zoneLabel(seg.start)} (${formatDuration(seg.end - seg.start)})`;
   bar.replaceChildren(...data.segments.map((seg) => {
@@ -102,4 +104,43 @@ export function renderTimeline({ bar, axisEl, detail, rows, caption }, data) {
     return tr;
   }));
   return { total, states };
+}
+
+// A sideways drag across the bar (mouse or finger, as on the plots) picks a stretch of the range drawn:
+// onPick(start, end). A tap stays a stretch's readout.
+export function dragToZoom(bar, onPick) {
+  const mark = document.createElement("div");
+  mark.className = "timeline-select";
+  let from = null;
+  const at = (e) => {
+    const box = bar.getBoundingClientRect();
+    return Math.min(Math.max(e.clientX - box.left, 0), box.width);
+  };
+  const show = (to) => {
+    mark.style.left = `${Math.min(from, to)}px`;
+    mark.style.width = `${Math.abs(to - from)}px`;
+  };
+  const end = (e) => {
+    window.removeEventListener("pointermove", move);
+    window.removeEventListener("pointerup", end);
+    window.removeEventListener("pointercancel", end);
+    mark.remove();
+    const to = e.type === "pointerup" ? at(e) : from;
+    const [lo, hi] = [Math.min(from, to), Math.max(from, to)];
+    const width = bar.getBoundingClientRect().width;
+    from = null;
+    if (hi - lo < 4 || !width) return;
+    const start = Number(bar.dataset.start), span = Number(bar.dataset.end) - start;
+    onPick(start + (span * lo) / width, start + (span * hi) / width);
+  };
+  const move = (e) => show(at(e));
+  bar.addEventListener("pointerdown", (e) => {
+    if (e.button > 0 || !bar.dataset.end) return;
+    from = at(e);
+    show(from);
+    bar.append(mark);
+    window.addEventListener("pointermove", move);
+    window.addEventListener("pointerup", end);
+    window.addEventListener("pointercancel", end);
+  });
 }

@@ -33,6 +33,8 @@ rows += [("/test/speech", "std_msgs/String", now - 300, '{"data": "Hello there"}
 rows += [("/cyborg_controller/state_change", "cyborg_controller/SystemState", began + at,
           json.dumps({"event": e, "from_system_state": a, "to_system_state": b}))
          for at, e, a, b in ((0, "", "", "startup"), (15, "succeeded", "startup", "suspension"))]
+TopicPolicy.objects.get_or_create(topic="/cyborg_controller/state_change",
+                                  defaults={"msg_type": "cyborg_controller/SystemState", "mode": "off"})
 TopicPolicy.objects.get_or_create(topic="/RosAria/battery_state_of_charge",
                                   defaults={"msg_type": "std_msgs/Float32", "mode": "off"})
 rows += [("/RosAria/battery_state_of_charge", "std_msgs/Float32", now - 500 + i * 10,
@@ -228,3 +230,54 @@ def test_plots_read_24_hour_times_in_the_site_zone_and_name_their_units(sized_pa
     expect(values.nth(0)).to_have_text(re.compile(r"^\d{4}-\d{2}-\d{2} \d{2}:\d{2}:\d{2} \w+$"))
     expect(values.nth(1)).to_have_text(re.compile(r"^\d+\.\d{3} %$"))
     assert 70 <= float(values.nth(1).inner_text().split()[0]) <= 90
+
+
+def _span(page) -> tuple[float, float]:
+    bar = page.locator("#timeline-bar")
+    return float(bar.get_attribute("data-start")), float(bar.get_attribute("data-end"))
+
+
+def test_the_timeline_follows_the_chosen_range_and_zooms_like_the_plots(sized_page, seeded):
+    page = sized_page
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    login(page, seeded, "vera", next_path="/history/")
+    page.click("[data-preset=timeline]")
+    expect(page.locator("#timeline-rows tr").first).to_be_visible()
+    start, end = _span(page)
+    assert end - start == pytest.approx(86400, abs=5)
+
+    # Half an hour that ends now: Show draws the timeline of that half hour (not a table, not a day).
+    zone = ZoneInfo(settings.TIME_ZONE)
+    to = datetime.now(zone).replace(second=0, microsecond=0)
+    since = to.timestamp() - 1800
+    page.select_option("#range", "custom")
+    page.fill("#start", datetime.fromtimestamp(since, zone).strftime("%Y-%m-%d %H:%M"))
+    page.fill("#end", to.strftime("%Y-%m-%d %H:%M"))
+    expect(page.locator("#field")).to_have_value("@timeline")
+    page.click("#plot-form button[type=submit]")
+    expect(page.locator("#timeline")).to_be_visible()
+    expect(page.locator("#timeline-bar")).to_have_attribute("data-start", f"{since:.0f}")
+    assert _span(page) == (pytest.approx(since), pytest.approx(to.timestamp()))
+    # Its axis is that half hour's clock: every label a minute inside it.
+    minutes = {datetime.fromtimestamp(since + 60 * i, zone).strftime("%H:%M") for i in range(31)}
+    ticks = [t.split()[-1] for t in page.locator("#timeline-axis .timeline-tick").all_inner_texts()]
+    assert len(ticks) >= 2 and set(ticks) <= minutes, ticks
+    expect(page.locator("#timeline-rows tr", has_text="suspension")).to_be_visible()
+
+    # A drag across its middle half zooms to that quarter hour; Whole range goes back.
+    bar = page.locator("#timeline-bar")
+    bar.scroll_into_view_if_needed()
+    box = bar.bounding_box()
+    assert box is not None
+    drag_across(page, box, 0.25, 0.75)
+    expect(page.locator("#plot-info")).to_contain_text("(zoomed)")
+    start, end = _span(page)
+    assert since + 300 < start < since + 600 and to.timestamp() - 600 < end < to.timestamp() - 300, (start, end)
+    expect(page.locator("#zoom-out")).to_be_visible()
+    page.click("#zoom-out")
+    expect(page.locator("#zoom-out")).to_be_hidden()
+    expect(page.locator("#plot-info")).not_to_contain_text("(zoomed)")
+    expect(page.locator("#timeline-bar")).to_have_attribute("data-start", f"{since:.0f}")
+    assert _span(page) == (pytest.approx(since), pytest.approx(to.timestamp()))
+    assert errors == []

@@ -83,6 +83,10 @@ def test_a_recorded_session_replays_as_it_was(page, replay_stack):
         page.goto(f"{stack.url}/history/replay/?start={began}&end={ended}&t={moment}")
         expect(page.locator("#replay-map")).to_have_attribute("data-pose", f"{pose['x']:.3f},{pose['y']:.3f}")
         expect(page.locator("#r-state")).to_have_text(state)
+        if fraction == 0.9:  # the mode asked for on this page's stack (nothing is published on robot_mode), and reached
+            assert state == "manual", state
+            expect(page.locator("#r-mode")).to_have_text("manual by otto")
+            expect(page.locator("#r-mode-reached")).to_have_text("manual ✓")
         expect(page.locator("#replay-frame")).not_to_have_attribute("data-t", "")
         frame_t = float(page.locator("#replay-frame").get_attribute("data-t"))
         assert moment - 1.0 < frame_t <= moment
