@@ -262,3 +262,11 @@ def test_the_page_lists_the_sessions_and_marks_this_one(operator):
     page = client.get("/account/").content.decode()
     assert "TestBrowser/1.0" in page and "this one" in page
     assert client.session.session_key not in page  # a session's key is its secret
+
+
+def test_every_page_links_the_account_page_and_it_is_marked_where_one_is(operator):
+    client = _signed_in(operator)
+    assert b'href="/account/"' in client.get("/alerts/").content
+    page = client.get("/account/").content.decode()
+    assert re.search(r'<a href="/account/" aria-current="page">Account</a>', page)
+    assert re.search(r'class="menu-current">Account<', page)
