@@ -52,8 +52,8 @@ HOME_KEYS = (
 STATEMACHINE_KEYS = (SMACH_GRAPH_KEY, SMACH_ACTIVE_KEY, "state_change", "state_transitions")
 # The diagnostics page.
 DIAGNOSTICS_PAGE_KEYS = (DIAGNOSTICS_KEY,)
-# The map page: the robot's position and plan, besides the server's own navigation keys.
-MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location", "bumper_state", *NAVIGATION_KEYS)
+# The map page: the robot's position, plan and motors (goals wait for them), besides the server's own navigation keys.
+MAP_PAGE_KEYS = ("robot_pose", "plan", "current_location", "bumper_state", "motors_state", *NAVIGATION_KEYS)
 # The drive page.
 DRIVE_KEYS = ("odom", "robot_pose", "motors_state")
 # The map page's overlays, each switched on and off by the operator (dashboard.preferences).

@@ -36,6 +36,8 @@ function onUpdate(frame) {
     el.textContent = `x ${fmt(m.position.x)} · y ${fmt(m.position.y)} · ${fmt(yaw * 180 / Math.PI, 0)}°`;
   } else if (frame.key === "motors_state") {
     $("motors").textContent = m.data ? "enabled" : "disabled";
+    motorsOff = m.data === false;
+    renderLock();
   }
 }
 live.watch(config.keys, onUpdate);
@@ -126,6 +128,7 @@ const lock = { holder: null, you: false };
 let estop = null; // the E-STOP message while it is latched: no input is sent
 let robotOnline = false;
 let robotHung = false;
+let motorsOff = false; // the robot says its motors are off: the server refuses moves, this says why
 let ws = null;
 let wsDelay = 500;
 let lastError = { message: "", at: 0 };
@@ -154,6 +157,8 @@ function renderLock() {
   card.classList.toggle("locked-out", !lock.you && !!lock.holder);
   card.classList.toggle("robot-offline", !robotOnline);
   $("drive-offline").hidden = robotOnline;
+  const motorsNote = $("motors-off");
+  if (motorsNote) motorsNote.hidden = !(motorsOff && robotOnline);
   $("drive-offline").textContent = robotHung
     ? "The robot is not responding: driving is disabled until it answers."
     : "The robot is offline: driving is disabled until it is back.";
@@ -190,6 +195,7 @@ function openSocket() {
     else if (frame.type === "commanded") setCommanded(frame.linear, frame.angular);
     else if (frame.type === "estop") onEstop(frame);
     else if (frame.type === "error") showError(frame.message);
+    else if (frame.type === "notice") notify(frame.message, "warn");
   };
   ws.onclose = (ev) => {
     card.classList.add("offline");
@@ -275,7 +281,12 @@ window.addEventListener("pagehide", () => stopInput("hidden"));
 
 const zone = $("stick");
 if (zone) {
-  const manager = createStick({ zone, mode: "static", position: { left: "50%", top: "50%" }, size: 140, color: "#2d6cdf" });
+  // dynamicPage: the stick measures where it is on every press and move (its first included), so
+  // an alert above it, the camera loading or a scroll never turns "up" into reverse.
+  const manager = createStick({
+    zone, mode: "static", position: { left: "50%", top: "50%" }, size: 140, dynamicPage: true, restOpacity: 1,
+    color: { front: "var(--stick-knob)", back: "transparent" },
+  });
   manager.on("move", (evt) => {
     const v = evt.data?.vector;
     if (!v) return;

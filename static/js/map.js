@@ -1,6 +1,7 @@
 // The map page: the server-rendered map image with a live overlay (robot, path, goal,
 // named locations), zoom/pan/pinch, press-drag-release goals and initial poses.
 import { deleteJSON, getJSON, notify, postJSON, request } from "./api.js";
+import { sendCommand } from "./commands.js";
 import { readConfig } from "./config.js";
 import { live } from "./live.js";
 import { drawOverlay } from "./map/draw.js";
@@ -167,6 +168,7 @@ const onUpdate = {
   nav_goal(m) { state.goal = m; renderGoal(); },
   nav_goal_status(m) { state.statuses = m; renderGoal(); },
   nav_locations(m) { state.locations = m.locations; renderLocations(); },
+  motors_state(m) { $("goal-motors-off").hidden = m.data !== false; },
 };
 
 function renderGoal() {
@@ -209,16 +211,31 @@ function setMode(mode) {
   document.querySelectorAll("[data-mode]").forEach((b) => b.setAttribute("aria-pressed", String(b.dataset.mode === mode)));
 }
 
+// Why the last press sent nothing (off the map, motors off…), on the map where the press was.
+let messageTimer = null;
+function showMapMessage(text) {
+  const el = $("map-message");
+  el.textContent = text;
+  el.hidden = !text;
+  clearTimeout(messageTimer);
+  if (text) messageTimer = setTimeout(() => { el.hidden = true; }, 10000);
+}
+
+// A refused press keeps its tool, so the next press aims again instead of panning.
 async function sendAim(mode, x, y, yaw) {
   const url = mode === "pose" ? config.urls.initial_pose : config.urls.goal;
+  let sent = false;
   try {
     const res = await postJSON(url, { x, y, yaw });
+    sent = true;
+    showMapMessage("");
     notify(mode === "pose" ? res.detail : `Goal sent to (${x.toFixed(2)}, ${y.toFixed(2)})`, "ok", { timeout: 3000 });
   } catch (err) {
+    showMapMessage(`${mode === "pose" ? "Pose" : "Goal"} not sent: ${err.message}`);
     notify(err.message, "error");
   } finally {
     state.drag = null;
-    setMode("pan");
+    if (sent) setMode("pan");
     scheduleDraw();
   }
 }
@@ -256,6 +273,7 @@ document.querySelectorAll("[data-mode]").forEach((b) => b.addEventListener("clic
 $("zoom-in").onclick = () => { const r = root.getBoundingClientRect(); view.zoomAt(r.width / 2, r.height / 2, 1.4); applyView(); };
 $("zoom-out").onclick = () => { const r = root.getBoundingClientRect(); view.zoomAt(r.width / 2, r.height / 2, 1 / 1.4); applyView(); };
 $("zoom-fit").onclick = () => view.meta && fit();
+$("goal-motors-enable")?.addEventListener("click", (ev) => sendCommand("motors", { enabled: true }, { control: ev.currentTarget }));
 $("goal-cancel").onclick = async () => {
   try { notify(cancelText(await postJSON(config.urls.cancel)), "info", { timeout: 3000 }); } catch (err) { notify(err.message, "error"); }
 };
@@ -303,7 +321,7 @@ async function goTo(name) {
   try {
     await postJSON(locationURL(config.urls.location_go, name));
     notify(`Sending the robot to ${name}`, "ok", { timeout: 3000 });
-  } catch (err) { notify(err.message, "error"); }
+  } catch (err) { showMapMessage(`Goal not sent: ${err.message}`); notify(err.message, "error"); }
 }
 
 async function removeLocation(name) {
