@@ -54,6 +54,8 @@ class LocationForm(forms.ModelForm):
         super().__init__(*args, **kwargs)
         if self.instance.pk is not None:
             self.initial["heading_deg"] = round(math.degrees(self.instance.yaw), 1)
+            for name in ("x", "y", "threshold"):  # millimetres: what a map shows and a robot reaches
+                self.initial[name] = round(getattr(self.instance, name), 3)
 
     def save(self, commit: bool = True) -> Location:
         self.instance.yaw = math.radians(self.cleaned_data["heading_deg"])
@@ -64,8 +66,16 @@ class LocationForm(forms.ModelForm):
 class LocationAdmin(admin.ModelAdmin):
     form = LocationForm
     fields = LocationForm.Meta.fields
-    list_display = ("name", "map_name", "x", "y", "heading", "threshold")
+    list_display = ("name", "map_name", "x_m", "y_m", "heading", "threshold")
     search_fields = ("name", "description")
+
+    @admin.display(description="x (m)", ordering="x")
+    def x_m(self, location: Location) -> str:
+        return f"{location.x:.3f}"
+
+    @admin.display(description="y (m)", ordering="y")
+    def y_m(self, location: Location) -> str:
+        return f"{location.y:.3f}"
 
     @admin.display(description="Heading (°)", ordering="yaw")
     def heading(self, location: Location) -> str:
