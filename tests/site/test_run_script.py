@@ -91,8 +91,8 @@ def test_the_server_keeps_running_when_the_simulator_dies():
                                 f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
                                cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:
-            wait_for_port(web, 60, run)
-            deadline = time.monotonic() + 60
+            wait_for_port(web, 180, run)
+            deadline = time.monotonic() + 120
             while not _robot_connected(web) and time.monotonic() < deadline:
                 time.sleep(0.2)
             assert _robot_connected(web), out.read_text()[-3000:]
