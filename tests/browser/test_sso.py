@@ -1,6 +1,7 @@
 """Single sign-on in a real browser against the tests' own OpenID provider (a process of its own):
 an operator signs in and drives, a viewer signs in and is refused commands, a person in no mapped
-group is refused, and a rotated signing key is survived."""
+group is refused (ten of them from one address do not lock the operators out of it), a signed-in
+session gets its own API token, and a rotated signing key is survived."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ USERS = [
     ProviderUser("kari", "kari-pw", groups=["cyborg-operators"], email="kari@ntnu.no"),
     ProviderUser("vera", "vera-pw", groups=["cyborg-viewers"], email="vera@ntnu.no"),
     ProviderUser("nils", "nils-pw", groups=["students"], email="nils@ntnu.no"),
+    *(ProviderUser(f"student{n}", f"student{n}-pw", groups=["students"]) for n in range(10)),
 ]
 
 
@@ -80,6 +82,37 @@ def test_a_person_in_no_mapped_group_is_refused(browser, sso_stack):
     with fresh_page(browser) as page:
         sign_in(page, stack, "nils")
         refused(page, stack, "is not in a group that may use the Cyborg")
+
+
+def _post(page, stack: Stack, path: str, body: dict | None = None):
+    token = next(c["value"] for c in page.context.cookies() if c["name"] == "csrftoken")
+    return page.request.post(f"{stack.url}{path}", data=body or {}, headers={"X-CSRFToken": token})
+
+
+def test_students_in_no_group_do_not_lock_their_address_out_and_an_operator_stops_the_robot(browser, sso_stack):
+    """Ten people in no mapped group sign in from one address (a campus NAT: here 127.0.0.1); each is
+    refused, none counts against the address: an operator from there signs in and presses the E-STOP."""
+    stack, _ = sso_stack
+    for n in range(10):
+        with fresh_page(browser) as page:
+            sign_in(page, stack, f"student{n}")
+            refused(page, stack, "is not in a group that may use the Cyborg")
+    with fresh_page(browser) as page:
+        sign_in(page, stack, "kari")
+        page.wait_for_url(f"{stack.url}/")
+        try:
+            page.locator("#estop-btn").click()
+            expect(page.locator("#estop-banner")).to_be_visible()
+            assert page.request.get(f"{stack.url}/api/robot/estop/").json()["latched"]
+        finally:
+            assert _post(page, stack, "/api/robot/estop/release/", {"confirm": True}).ok
+            assert _post(page, stack, "/api/robot/motors/", {"enabled": True}).ok
+        # A person who signs in here gets an API token from the session (no password to give).
+        got = _post(page, stack, "/api/auth/token/")
+        assert got.ok, got.text()
+        key = got.json()["token"]
+        state = page.request.get(f"{stack.url}/api/robot/state/", headers={"Authorization": f"Token {key}"})
+        assert state.ok, state.text()
 
 
 def test_a_rotated_signing_key_is_survived_and_logout_ends_both_sessions(browser, sso_stack):
