@@ -3,6 +3,7 @@ import { notify } from "./api.js";
 import { initAudio } from "./audio.js";
 import { initCommands } from "./commands.js";
 import { readConfig } from "./config.js";
+import { heading, linkState } from "./linkstate.js";
 import { live } from "./live.js";
 import { SensorsCard } from "./sensors.js";
 import { formatAge, formatTime } from "./time.js";
@@ -152,16 +153,15 @@ function uplinkText(u) {
 }
 
 function renderStatus(s) {
-  if (s.server_down) {
-    set("link.state", "Server unreachable");
-    set("link.detail", "retrying…");
-  } else {
-    set("link.state", s.connected ? "Online" : (s.link_running === false ? "Robot link not running" : "Offline"));
+  const state = linkState(s);
+  set("link.state", heading(state));
+  if (s.server_down) set("link.detail", state.why);
+  else {
     const since = s.since ? formatAge(Date.now() / 1000 - s.since) : "";
-    set("link.detail", s.connected ? `connected ${since}` : `retrying${s.attempts ? ` (attempt ${s.attempts})` : ""}`);
+    set("link.detail", state.why || (s.connected ? `connected ${since}` : `retrying${s.attempts ? ` (attempt ${s.attempts})` : ""}`));
     if (s.url) set("link.url", s.uplink ? uplinkText(s.uplink) : s.url);
   }
-  document.getElementById("card-connection").classList.toggle("bad", !s.connected);
+  document.getElementById("card-connection").classList.toggle("bad", !state.ok);
 }
 
 function tickAges() {

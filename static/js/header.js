@@ -1,6 +1,7 @@
 // The header on every page: the robot link pill follows the live socket's status; on a
 // phone the pages and the account sit behind the menu button.
 import { initAlertStrip } from "./alert-strip.js";
+import { linkState } from "./linkstate.js";
 import { live } from "./live.js";
 import "./shortcuts.js";
 import "./theme.js";
@@ -29,17 +30,11 @@ function showServices(down) {
 live.onStatus((status) => {
   showServices(status.services_down);
   if (!pill) return;
-  pill.className = `pill ${status.connected ? "pill-ok" : "pill-bad"}`;
-  // "Command path down": the link runs but does not answer requests; nothing would reach the robot.
-  // "Not responding": connected, but the robot has said nothing for a while (hung, frozen).
-  const hung = status.robot_connected && status.responding === false;
-  pill.textContent = status.connected ? "robot online" : status.link_running === false ? "link down"
-    : status.command_path === false ? "command path down" : hung ? "not responding" : "robot offline";
-  pill.dataset.state = pill.textContent;
-  pill.title = status.command_path === false
-    ? "The robot link does not answer requests: commands, including E-STOP, cannot reach the robot"
-    : hung ? "Connected, but the robot has not answered for a while: commands are refused until it does"
-    : status.url || "";
+  const state = linkState(status);
+  pill.className = `pill ${state.ok ? "pill-ok" : "pill-bad"}`;
+  pill.textContent = state.label;
+  pill.dataset.state = state.label;
+  pill.title = state.why || status.url || "";
 });
 
 initAlertStrip(document.getElementById("alert-strip"), document.getElementById("header-battery"));

@@ -166,7 +166,7 @@ def test_a_browser_through_nginx_sees_the_robot_live_through_its_uplink_and_driv
         page.fill("input[name=password]", PASSWORD)
         page.click("button[type=submit]")
         page.wait_for_url(f"{site}/")
-        expect(page.locator('[data-field="link.state"]')).to_have_text("Online")
+        expect(page.locator('[data-field="link.state"]')).to_have_text("Robot online")
         expect(page.locator('[data-field="link.url"]')).to_have_text(
             re.compile(f"^robot connected through its uplink from {re.escape(world.side.robot_ip)} since "))
 
