@@ -5,6 +5,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Any
 
+from django.conf import settings
 from django.utils.functional import empty
 
 
@@ -46,3 +47,9 @@ def role_of(user: Any) -> Role | None:
     if user and user.is_authenticated:
         return Role.VIEWER
     return None
+
+
+def may_sign_in_with_password(user: Any) -> bool:
+    """With single sign-on required, a local password is for break-glass accounts only."""
+    return (not settings.SSO_REQUIRED or not settings.OIDC_ISSUER or user.is_superuser
+            or user.has_perm("dashboard.sign_in_with_password"))

@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from django.conf import settings
 from django.contrib.auth import get_user_model
 from django.db import transaction
 
@@ -55,8 +54,3 @@ def account_for(issuer: str, claims: Mapping[str, Any], role: Role) -> Any:
     identity.save(update_fields=["role", "last_login"])
     return user
 
-
-def may_sign_in_with_password(user: Any) -> bool:
-    """With single sign-on required, the login form is for break-glass accounts only."""
-    return (not settings.SSO_REQUIRED or not settings.OIDC_ISSUER or user.is_superuser
-            or user.has_perm("dashboard.sign_in_with_password"))

@@ -16,10 +16,10 @@ from django.urls import reverse
 from django.utils.http import url_has_allowed_host_and_scheme
 from django.views.decorators.cache import never_cache
 
+from cyborg_site.roles import may_sign_in_with_password
 from dashboard.sso.claims import ClaimsRefused
 from dashboard.sso.client import REFUSALS, claims_from_callback, provider_logout_url, reason_of, redirect_to_provider
 from dashboard.sso.config import SsoConfig, sso_config
-from dashboard.sso.people import may_sign_in_with_password
 from dashboard.sso.signin import ID_TOKEN_KEY, Refusal, refuse, sign_in
 
 NEXT_KEY = "sso_next"

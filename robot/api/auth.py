@@ -14,8 +14,7 @@ from rest_framework.authtoken.views import ObtainAuthToken
 from rest_framework.request import Request
 from rest_framework.response import Response
 
-from dashboard.sso.config import sso_config
-from dashboard.sso.people import may_sign_in_with_password
+from cyborg_site.roles import may_sign_in_with_password
 from robot.api.common import error_responses
 from robot.api.tokens import expires_at, token_for
 
@@ -41,8 +40,7 @@ class PasswordNotAccepted(exceptions.PermissionDenied):
     default_code = "sso_required"
 
     def __init__(self) -> None:
-        config = sso_config()
-        super().__init__(f"Sign in with {config.name if config else 'single sign-on'}: a password gives an API token "
+        super().__init__(f"Sign in with {settings.OIDC_NAME}: a password gives an API token "
                          "only to a break-glass account. Get one from your account page, or POST here with an empty "
                          "body from your signed-in session.")
 
