@@ -8,16 +8,32 @@ const button = document.getElementById("estop-btn");
 const banner = document.getElementById("estop-banner");
 const release = document.getElementById("estop-release");
 const SHORTCUT = "Escape";
+let shown = null; // the latch on the banner
+let robotOnline = false;
 
 function render(latch) {
   if (!banner || !latch) return;
+  shown = latch;
   banner.hidden = !latch.latched;
   banner.dataset.latched = String(!!latch.latched);
   banner.dataset.by = latch.by || "";
   document.getElementById("estop-banner-text").textContent = latch.latched ? latch.message : "";
-  const failed = (latch.steps || []).filter((s) => !s.ok);
-  document.getElementById("estop-banner-failed").textContent = latch.latched && failed.length
-    ? `Failed: ${failed.map((s) => `${s.step} (${s.detail})`).join("; ")}` : "";
+  document.getElementById("estop-banner-failed").textContent = latch.latched ? failedText(latch.steps || []) : "";
+}
+
+// A step refused because the robot was away is stale once it is back: say so, not "Failed" (the latch holds).
+const AWAY = /^Robot (offline|not responding)/;
+function failedText(steps) {
+  const failed = steps.filter((s) => !s.ok);
+  const stale = robotOnline ? failed.filter((s) => AWAY.test(s.detail || "")) : [];
+  const current = failed.filter((s) => !stale.includes(s));
+  const parts = [];
+  if (current.length) parts.push(`Failed: ${current.map((s) => `${s.step} (${s.detail})`).join("; ")}`);
+  if (stale.length) {
+    parts.push(`The robot is back; these steps did not reach it while it was away: ${stale.map((s) => s.step).join(", ")}. `
+      + (button ? "Press E-STOP again to repeat them." : "An operator can repeat them with the E-STOP."));
+  }
+  return parts.join(" ");
 }
 
 async function engage() {
@@ -61,3 +77,8 @@ release?.addEventListener("click", async () => {
 });
 
 live.watch(["estop"], (frame) => render(frame.msg));
+live.onStatus((status) => {
+  if (status.connected === robotOnline) return;
+  robotOnline = !!status.connected;
+  render(shown);
+});
