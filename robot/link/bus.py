@@ -64,6 +64,13 @@ class EstopEngaged(RobotError):
     code = "estop"
 
 
+class ReleaseFirst(RobotError):
+    """The link to the robot was lost while a driver moved it: motion waits for a fresh press."""
+
+    status_code = 409
+    code = "release_first"
+
+
 class RobotNotFound(RobotError):
     """The robot has no such thing (a topic rosapi does not know)."""
 
@@ -91,7 +98,7 @@ def _not_responding(request: LinkRequest, *, responding: bool) -> RobotNotRespon
                               f"for {getattr(settings, 'ROBOT_HANG_S', 2.0):g} s; commands wait until it answers")
 
 
-# The marks of the requests made in this context (``stopping``, ``emergency``).
+# The marks of the requests made in this context (``stopping``, ``emergency``, ``fresh_press``).
 _marks: ContextVar[tuple[str, ...]] = ContextVar("link_request_marks", default=())
 
 
@@ -116,6 +123,12 @@ def emergency() -> AbstractContextManager[None]:
     """The E-STOP's own requests: they pass the latch (``stopping``), reach a link that can no
     longer prove its lease because Redis is out of reach, and go by the direct path first."""
     return _marked("stopping", "emergency")
+
+
+def fresh_press() -> AbstractContextManager[None]:
+    """A driver's first move after letting go: it may move a robot whose link was lost while a key
+    was held (the held key's own moves wait for one, ``CmdVelGuard.lost``)."""
+    return _marked("fresh_press")
 
 
 def _new_request(op: str, timeout: float, fields: dict[str, Any]) -> LinkRequest:

@@ -6,6 +6,10 @@
   hold, and refuses every non-zero Twist until released, and every other publish or service
   call that would move the robot or change its mode or motors (``interface.passes_latch``): the
   last check before the robot, so no sequence, queued request or stale process outlives a stop.
+- Lost link: after the connection to the robot drops (a blip, the uplink redialling, the robot
+  restarting), a moving Twist goes out only after a zero or as a fresh press (a driver's first move
+  after letting go): a key held through the loss must be let go and pressed again, so a restored link
+  never restarts motion by itself.
 - Stop: a link that shuts down while the robot moves sends zero first.
 """
 
@@ -22,6 +26,7 @@ from robot import interface as ri
 log = logging.getLogger(__name__)
 
 LATCHED = "E-STOP engaged: refused until an operator releases it"
+RELEASE_FIRST = "The link to the robot was lost: let go of the controls and press again to drive"
 
 
 class CmdVelGuard:
@@ -42,22 +47,27 @@ class CmdVelGuard:
         self.latched = False
         self.changed_at = 0.0  # monotonic time this link last engaged or released itself
         self.moving = False  # the last Twist that went out was non-zero
+        self.release_first = False  # the connection dropped since the last zero: motion waits for one
         self._deadman: asyncio.TimerHandle | None = None
         self._hold: asyncio.Task | None = None
 
-    def check_publish(self, name: str, msg: dict[str, Any], *, by_the_stop: bool = False) -> str | None:
+    def check_publish(self, name: str, msg: dict[str, Any], *, by_the_stop: bool = False,
+                      fresh_press: bool = False) -> str | None:
         """Before anything goes out on topic ``name`` (or to service ``name``): a refusal message, or None."""
         if name == ri.topic("cmd_vel").name:
-            return self.check(msg)
+            return self.check(msg, fresh_press=fresh_press)
         if self.latched and not ri.passes_latch(name, msg, by_the_stop=by_the_stop):
             return f"{LATCHED} ({name})"
         return None
 
-    def check(self, msg: dict[str, Any]) -> str | None:
+    def check(self, msg: dict[str, Any], *, fresh_press: bool = False) -> str | None:
         """Before a Twist goes out: a refusal message, or None (and the deadman is re-armed)."""
         zero = ri.is_zero_twist(msg)
         if self.latched and not zero:
             return f"{LATCHED} (motion)"
+        if self.release_first and not zero and not fresh_press:
+            return RELEASE_FIRST
+        self.release_first = False
         self.moving = not zero
         self._disarm()
         if self.moving:
@@ -75,6 +85,12 @@ class CmdVelGuard:
     def release(self) -> None:
         self.latched = False
         self.changed_at = time.monotonic()
+
+    def lost(self) -> None:
+        """The connection to the robot dropped: what was moving stopped there, and moves wait for a zero."""
+        self.release_first = True
+        self.moving = False
+        self._disarm()
 
     def settled(self, grace_s: float) -> bool:
         """No engage or release of this link's own for ``grace_s``: the shared store has had time

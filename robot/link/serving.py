@@ -13,6 +13,7 @@ import roslibpy
 
 from robot import interface as ri
 from robot.link.core import RECONNECT_INTERVAL_S
+from robot.link.guard import RELEASE_FIRST
 from robot.link.rosclient import call_service
 from robot.link.subscriptions import Subscriptions
 from robot.live import queues
@@ -127,8 +128,11 @@ class Serving(Subscriptions):
         """The last check before the robot: the latch, on every publish and service call."""
         if self.guard is None:
             return None
-        refusal = self.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")))
-        return {"ok": False, "error_code": "estop", "error": refusal} if refusal else None
+        refusal = self.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")),
+                                           fresh_press=bool(request.get("fresh_press")))
+        if refusal is None:
+            return None
+        return {"ok": False, "error_code": "release_first" if refusal == RELEASE_FIRST else "estop", "error": refusal}
 
     def _publish_zero(self) -> None:
         if self.ros is None or not self.ros.is_connected:

@@ -55,6 +55,8 @@ class Upkeep(LinkCore):
         if self.connected:
             log.warning("robot link lost %s; reconnecting", self.url)
             self.since = time.time()
+            if self.guard is not None:
+                self.guard.lost()
         self.connected = False
         self.attempts += 1
         self._spawn(self.publish_status())

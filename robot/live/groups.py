@@ -94,6 +94,7 @@ class LinkRequest(TypedDict, total=False):
     timeout: float
     stopping: bool  # stops the robot or does not move it: may pass the latch (interface.passes_latch)
     emergency: bool  # one of the E-STOP's own steps: the direct path, and a link that cannot prove its lease
+    fresh_press: bool  # cmd_vel: a driver's first move after letting go (passes the guard's lost-link hold)
     by: str  # estop: who pressed it
     at: float  # estop: when (epoch seconds)
     listener: str  # audio: which listener's lease

@@ -180,8 +180,8 @@ class Driver:
             self.holding = False
             holder = await self.lock.holder()
             await self._send_lock(holder.username if holder else None, False)
-        elif kind == "error":
-            await self._error(str(detail), "failed")
+        elif kind == "error" and isinstance(detail, RobotError):
+            await self._error(detail.message, detail.code)
 
     def _watch_expiry(self) -> None:
         """Tell every page when an idle driver's lock runs out (nobody else would notice)."""

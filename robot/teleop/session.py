@@ -15,7 +15,7 @@ from collections.abc import Awaitable, Callable
 
 from django.conf import settings
 
-from robot.link.bus import RobotError, apublish
+from robot.link.bus import RobotError, apublish, fresh_press
 from robot.live.locks import HeldLock, Holder
 from robot.supervisor import supervise
 from robot.teleop.twist import STOP, Command, twist
@@ -24,7 +24,7 @@ log = logging.getLogger(__name__)
 
 Publisher = Callable[[Command], Awaitable[None]]
 # Told about what the session did on its own: ("commanded", cmd) | ("deadman", STOP) | ("lost", STOP)
-# | ("error", message).
+# | ("error", RobotError).
 Listener = Callable[[str, object], Awaitable[None]]
 
 
@@ -95,7 +95,11 @@ class TeleopSession:
                     await self._publish(STOP)
                 return command
             if changed:  # a new command goes out now, not at the next tick
-                await self._publish(command)
+                if self.moving:
+                    await self._publish(command)
+                else:  # a fresh press: it may move a robot whose link was lost (and found) meanwhile
+                    with fresh_press():
+                        await self._publish(command)
             self.active = True
         if self._task is None or self._task.done():
             self._task = supervise(f"teleop.{self.me.owner}", self._run, transient=True)
@@ -133,7 +137,7 @@ class TeleopSession:
             await self._publish_fn(command)
         except RobotError as exc:
             self.active = False
-            await self._listener("error", exc.message)
+            await self._listener("error", exc)
             return
         self._last_publish = time.monotonic()
         self.moving = not command.is_zero

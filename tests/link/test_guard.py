@@ -7,7 +7,7 @@ import asyncio
 import logging
 
 from robot import interface as ri
-from robot.link.guard import CmdVelGuard
+from robot.link.guard import RELEASE_FIRST, CmdVelGuard
 
 FORWARD = {"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 
@@ -49,4 +49,17 @@ async def test_under_the_latch_only_what_stops_passes_and_the_stops_own_walk_onl
     assert stop.check_publish(ri.service("disable_motors").name, {}) is None
     stop.release()
     assert stop.check_publish(event, {"data": "demo_start"}) is None
+    stop.stop()
+
+
+async def test_after_a_lost_connection_motion_waits_for_a_zero():
+    stop = guard(lambda: None)
+    assert stop.check(FORWARD) is None
+    stop.lost()  # a key was held when the connection dropped
+    assert not stop.moving
+    assert stop.check(FORWARD) == RELEASE_FIRST  # the held key, after the reconnect: refused
+    assert stop.check(ri.ZERO_TWIST) is None  # the driver let go
+    assert stop.check(FORWARD) is None  # and pressed again
+    stop.lost()
+    assert stop.check(FORWARD, fresh_press=True) is None  # a driver who was not holding a key then
     stop.stop()
