@@ -193,3 +193,36 @@ async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(s
     finally:
         await _stop(link, tasks)
         relay.close()
+
+
+async def test_a_key_held_through_an_uplink_blip_moves_nothing_until_released(sim, endpoint, credential, agent_for):
+    """The uplink drops for a moment while a driver holds a key: after the agent redials, the held key's
+    Twists are refused (the driver is told to let go), and a release followed by a press drives again."""
+    _, text = credential
+    relay = LatencyRelay(("127.0.0.1", free_port()), (endpoint.host, endpoint.port))
+    agent = agent_for(text, UPLINK_SERVER_URL=f"ws://127.0.0.1:{relay.listen[1]}/uplink/")
+    await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
+    link, tasks = await _link()
+    try:
+        await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
+        before = sim.received_count("/cmd_vel")
+        await _drive(link, 0.3, 0.3)
+        await async_wait_until(lambda: 0.3 in _speeds_since(sim, before), timeout=5, what="driving at the robot")
+        relay.cut()  # the blip: the agent stops the robot and redials
+        await async_wait_until(lambda: not link.connected, timeout=10, what="the link noticing the blip")
+        await async_wait_until(lambda: link.connected, timeout=15, what=f"the uplink back\n{agent.log()}")
+        back_at = sim.received_count("/cmd_vel")
+        refusals = []
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:  # the key is still held
+            reply = await link.execute(_twist(0.3))
+            refusals.append(reply.get("error_code"))
+            await asyncio.sleep(0.05)
+        assert set(refusals) == {"release_first"}, refusals
+        assert not any(_speeds_since(sim, back_at)), "the held key moved the robot after the blip"
+        assert (await link.execute(_twist(0.0)))["ok"]  # let go …
+        await _drive(link, 0.2, 0.3)  # … and press again
+        await async_wait_until(lambda: 0.2 in _speeds_since(sim, back_at), timeout=5, what="driving again")
+    finally:
+        await _stop(link, tasks)
+        relay.close()
