@@ -58,10 +58,11 @@ class SessionSeenMiddleware:
     def __call__(self, request: HttpRequest) -> HttpResponseBase:
         response = self.get_response(request)
         # Only a session the request read anyway: no query of its own, and none at all for the
-        # E-STOP's way while the database is down.
-        if request.session.accessed and request.session.get(SESSION_KEY):
+        # E-STOP's way while the database is down (a read that failed in the view fails here again).
+        if request.session.accessed:
             with contextlib.suppress(DatabaseError):
-                session_seen(request)
+                if request.session.get(SESSION_KEY):
+                    session_seen(request)
         return response
 
 

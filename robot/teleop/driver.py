@@ -97,10 +97,11 @@ class Driver:
         except InvalidInput as exc:
             raise InvalidCommand(str(exc)) from None
         self._cancel_expiry()
+        if not self.holding:
+            await self._refuse_if_latched()  # the stop is the reason to give, motors off or not
         if not command.is_zero:
             await self._refuse_if_motors_off()
         if not self.holding:
-            await self._refuse_if_latched()
             await self._take_free_lock()
         try:
             await self.session.drive(command)

@@ -13,7 +13,7 @@ from robot import interface as ri
 from robot.models import AuditEntry
 from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until
-from tests.teleop.support import drive_socket, is_moving, is_zero, key, twists, wait_twist
+from tests.teleop.support import drive_socket, is_moving, is_zero, key, settled_steps, twists, wait_twist
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -214,16 +214,19 @@ async def test_a_mode_change_under_way_sends_nothing_after_the_estop_answers(lin
         await until_the_server_hears(lambda s: s == "suspension", "suspension")
         change = asyncio.ensure_future(achange_mode(user=operator, source="api", mode=ri.Mode.BEHAVIOUR))
         await asyncio.sleep(0.05 + 0.45 * run / 19)
-        report = await estop_run(user=operator, source="page")
+        await estop_run(user=operator, source="page")
         answered = time.time()
-        assert report.ok, report.summary()
+        steps = await settled_steps()  # how each ended (on a loaded machine a step may answer late)
+        settled = time.time()
+        assert all(s["ok"] for s in steps.values()), f"run {run + 1}: {steps}"
         with contextlib.suppress(RobotError):
             await change
         await asyncio.sleep(0.3)  # anything still on its way arrives
-        # The stop's own last message may still be on the wire when it answers (well under 0.1 s).
+        # The stop's own messages may still be on the wire when it answers, or come from a step that
+        # answers late on a loaded machine (well under 0.1 s after its steps ended); nothing else may.
         late = [(name, r["msg"], round(r["t"] - answered, 3)) for name in names
                 for r in sim.call(lambda n=name: sim.robot.received_with_times(n)) if r["t"] > answered
-                if r["t"] > answered + 0.1 or not ri.passes_latch(name, r["msg"], by_the_stop=True)]
+                if r["t"] > settled + 0.1 or not ri.passes_latch(name, r["msg"], by_the_stop=True)]
         assert late == [], f"run {run + 1}: after the E-STOP's answer the robot got {late}"
         state = sim.snapshot()["state"]
         assert state["smach_state"] == "suspension", f"run {run + 1}: {state}"
