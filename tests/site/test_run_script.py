@@ -4,17 +4,23 @@ neither the link's first connect nor the stop leaves a traceback in the log."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
+
+import pytest
 
 from tests.stack import ROOT, free_port, wait_for_port
 
 BIN = str(Path(sys.executable).parent)
+# Each starts a simulator and a server: on a loaded machine that alone can take minutes.
+pytestmark = pytest.mark.timeout(420)
 
 
 def _listening(port: int) -> bool:
@@ -24,7 +30,10 @@ def _listening(port: int) -> bool:
         return s.connect_ex(("127.0.0.1", port)) == 0
 
 
-def test_a_ctrl_c_stops_the_simulator_and_the_server_cleanly():
+@contextlib.contextmanager
+def _run_sh() -> Iterator[tuple[subprocess.Popen, Path, tuple[int, int, int]]]:
+    """scripts/run.sh on free ports with a fresh VAR_DIR, in a session of its own (a signal goes to the
+    whole group, as a terminal's Ctrl-C does); killed if the test left it running."""
     var = tempfile.mkdtemp(prefix="cyborg-run-")
     env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")} | {"VAR_DIR": var}
     subprocess.run([sys.executable, "manage.py", "migrate", "--noinput"], cwd=ROOT, env=env, check=True,
@@ -32,22 +41,26 @@ def test_a_ctrl_c_stops_the_simulator_and_the_server_cleanly():
     web, sim, video = free_port(), free_port(), free_port()
     out = Path(var) / "run.log"
     with out.open("w") as log:
-        # A session of its own: the signal goes to the whole group, as a terminal's Ctrl-C does.
         run = subprocess.Popen(["bash", "scripts/run.sh", BIN, str(web), str(sim), str(video),
                                 f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
                                cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:
-            wait_for_port(web, 30, run)
-            deadline = time.monotonic() + 30
-            while "robot link connected" not in out.read_text() and time.monotonic() < deadline:
-                time.sleep(0.2)
-            assert "robot link connected" in out.read_text(), out.read_text()[-3000:]
-            time.sleep(3)  # the reconnect timer the link's first connect may leave behind would fire now
-            os.killpg(run.pid, signal.SIGINT)
-            assert run.wait(30) == 0, out.read_text()[-3000:]
+            yield run, out, (web, sim, video)
         finally:
             if run.poll() is None:
                 os.killpg(run.pid, signal.SIGKILL)
+
+
+def test_a_ctrl_c_stops_the_simulator_and_the_server_cleanly():
+    with _run_sh() as (run, out, (web, sim, video)):
+        wait_for_port(web, 180, run)  # a loaded machine is slow to start both
+        deadline = time.monotonic() + 120
+        while "robot link connected" not in out.read_text() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert "robot link connected" in out.read_text(), out.read_text()[-3000:]
+        time.sleep(3)  # the reconnect timer the link's first connect may leave behind would fire now
+        os.killpg(run.pid, signal.SIGINT)
+        assert run.wait(30) == 0, out.read_text()[-3000:]
     text = out.read_text()
     assert "Segmentation fault" not in text
     assert not _listening(web) and not _listening(sim) and not _listening(video)
@@ -80,31 +93,18 @@ def _robot_connected(web: int) -> bool | None:
 
 
 def test_the_server_keeps_running_when_the_simulator_dies():
-    var = tempfile.mkdtemp(prefix="cyborg-run-")
-    env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")} | {"VAR_DIR": var}
-    subprocess.run([sys.executable, "manage.py", "migrate", "--noinput"], cwd=ROOT, env=env, check=True,
-                   capture_output=True)
-    web, sim, video = free_port(), free_port(), free_port()
-    out = Path(var) / "run.log"
-    with out.open("w") as log:
-        run = subprocess.Popen(["bash", "scripts/run.sh", BIN, str(web), str(sim), str(video),
-                                f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
-                               cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        try:
-            wait_for_port(web, 180, run)
-            deadline = time.monotonic() + 120
-            while not _robot_connected(web) and time.monotonic() < deadline:
-                time.sleep(0.2)
-            assert _robot_connected(web), out.read_text()[-3000:]
-            os.kill(_child_running(run.pid, "simrobot"), signal.SIGKILL)  # the simulator crashes
-            deadline = time.monotonic() + 60
-            while _robot_connected(web) is not False and time.monotonic() < deadline:
-                time.sleep(0.2)
-            assert _robot_connected(web) is False, out.read_text()[-3000:]  # up, and says the robot is offline
-            assert run.poll() is None and "the server keeps running" in out.read_text()
-            os.killpg(run.pid, signal.SIGINT)  # Ctrl-C still stops everything
-            assert run.wait(30) == 0, out.read_text()[-3000:]
-        finally:
-            if run.poll() is None:
-                os.killpg(run.pid, signal.SIGKILL)
+    with _run_sh() as (run, out, (web, sim, video)):
+        wait_for_port(web, 180, run)
+        deadline = time.monotonic() + 120
+        while not _robot_connected(web) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert _robot_connected(web), out.read_text()[-3000:]
+        os.kill(_child_running(run.pid, "simrobot"), signal.SIGKILL)  # the simulator crashes
+        deadline = time.monotonic() + 60
+        while _robot_connected(web) is not False and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert _robot_connected(web) is False, out.read_text()[-3000:]  # up, and says the robot is offline
+        assert run.poll() is None and "the server keeps running" in out.read_text()
+        os.killpg(run.pid, signal.SIGINT)  # Ctrl-C still stops everything
+        assert run.wait(30) == 0, out.read_text()[-3000:]
     assert not _listening(web) and not _listening(sim) and not _listening(video)

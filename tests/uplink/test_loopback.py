@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
 
 import pytest
@@ -164,10 +165,9 @@ def _speeds_since(sim, count: int) -> list[float]:
     return [m["linear"]["x"] for m in sim.received("/cmd_vel")[-new:]] if new > 0 else []
 
 
-async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(sim, endpoint, credential,
-                                                                               agent_for):
-    """A frozen uplink thaws with what waited in it: the agent stops the robot during the freeze and
-    drops the Twists that waited past its deadman time, and a fresh one after the thaw drives again."""
+@contextlib.asynccontextmanager
+async def _through_a_relay(endpoint, credential, agent_for):
+    """An agent dialling ``endpoint`` through a relay the test can freeze or cut, and a link through it."""
     _, text = credential
     relay = LatencyRelay(("127.0.0.1", free_port()), (endpoint.host, endpoint.port))
     agent = agent_for(text, UPLINK_SERVER_URL=f"ws://127.0.0.1:{relay.listen[1]}/uplink/")
@@ -175,6 +175,17 @@ async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(s
     link, tasks = await _link()
     try:
         await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
+        yield relay, agent, link
+    finally:
+        await _stop(link, tasks)
+        relay.close()
+
+
+async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(sim, endpoint, credential,
+                                                                               agent_for):
+    """A frozen uplink thaws with what waited in it: the agent stops the robot during the freeze and
+    drops the Twists that waited past its deadman time, and a fresh one after the thaw drives again."""
+    async with _through_a_relay(endpoint, credential, agent_for) as (relay, agent, link):
         before = sim.received_count("/cmd_vel")
         await _drive(link, 0.3, 0.4)
         await async_wait_until(lambda: 0.3 in _speeds_since(sim, before), timeout=5, what="driving at the robot")
@@ -190,21 +201,12 @@ async def test_drive_commands_held_up_in_a_frozen_uplink_never_reach_the_robot(s
         await async_wait_until(lambda: 0.1 in _speeds_since(sim, thawed_at), timeout=5, what="driving again")
         assert 0.2 not in _speeds_since(sim, thawed_at), "a Twist held up in the freeze reached the robot"
         assert "dropped a drive command" in agent.log()
-    finally:
-        await _stop(link, tasks)
-        relay.close()
 
 
 async def test_a_key_held_through_an_uplink_blip_moves_nothing_until_released(sim, endpoint, credential, agent_for):
     """The uplink drops for a moment while a driver holds a key: after the agent redials, the held key's
     Twists are refused (the driver is told to let go), and a release followed by a press drives again."""
-    _, text = credential
-    relay = LatencyRelay(("127.0.0.1", free_port()), (endpoint.host, endpoint.port))
-    agent = agent_for(text, UPLINK_SERVER_URL=f"ws://127.0.0.1:{relay.listen[1]}/uplink/")
-    await async_wait_until(lambda: endpoint.live is not None, timeout=10, what=f"uplink open\n{agent.log()}")
-    link, tasks = await _link()
-    try:
-        await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
+    async with _through_a_relay(endpoint, credential, agent_for) as (relay, agent, link):
         before = sim.received_count("/cmd_vel")
         await _drive(link, 0.3, 0.3)
         await async_wait_until(lambda: 0.3 in _speeds_since(sim, before), timeout=5, what="driving at the robot")
@@ -223,6 +225,3 @@ async def test_a_key_held_through_an_uplink_blip_moves_nothing_until_released(si
         assert (await link.execute(_twist(0.0)))["ok"]  # let go …
         await _drive(link, 0.2, 0.3)  # … and press again
         await async_wait_until(lambda: 0.2 in _speeds_since(sim, back_at), timeout=5, what="driving again")
-    finally:
-        await _stop(link, tasks)
-        relay.close()
