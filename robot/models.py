@@ -1,6 +1,7 @@
 from django.conf import settings
 from django.core.validators import MaxValueValidator, MinValueValidator, RegexValidator
 from django.db import models
+from rest_framework.authtoken.models import Token
 
 _pad = [MinValueValidator(-1.0), MaxValueValidator(1.0)]
 _slug = RegexValidator(r"^[A-Za-z0-9_\-]+$", "Use letters, digits, '_' and '-' only.")
@@ -92,5 +93,18 @@ class Location(models.Model):
     def __str__(self) -> str:
         return self.name
 
-from robot.api.models import TokenExpiry  # noqa: E402,F401  (an API token's chosen end belongs to this app)
+
+
+class TokenExpiry(models.Model):
+    """When a token made on its person's account page ends; a token without one ends
+    ``API_TOKEN_DAYS`` after it was made."""
+
+    token = models.OneToOneField(Token, primary_key=True, on_delete=models.CASCADE, related_name="expiry")
+    expires = models.DateTimeField()
+
+    class Meta:
+        verbose_name_plural = "token expiries"
+
+    def __str__(self) -> str:
+        return f"{self.token.user} until {self.expires:%Y-%m-%d %H:%M}"
 from robot.uplink.models import UplinkCredential  # noqa: E402,F401  (the uplink credentials belong to this app)

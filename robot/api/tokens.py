@@ -20,7 +20,7 @@ from rest_framework.authtoken.models import Token
 from rest_framework.exceptions import AuthenticationFailed, ValidationError
 
 from cyborg_site.roles import role_of
-from robot.api.models import TokenExpiry
+from robot.models import TokenExpiry
 
 # A valid token is trusted this long without asking the database again (per process): a deleted
 # token, an expired one or a deactivated or demoted user stops working within this time in every
