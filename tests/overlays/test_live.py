@@ -157,10 +157,17 @@ async def test_the_global_costmap_is_served_as_tiles_and_an_update_patches_its_t
         # an update in the unknown corner, far from the robot's own updates
         sim.robot.publish_external(ri.topic("global_costmap_updates").name, {
             "header": {"frame_id": "map"}, "x": 0, "y": 0, "width": 2, "height": 1, "data": [100, 42]})
-        patched = (await receive_until(ws, update_of(
-            OVERLAY_GLOBAL_COSTMAP_KEY, lambda m: m["tiles"][0][0] > meta["tiles"][0][0]), timeout=10))["msg"]
-        assert patched["version"] == meta["version"]
-        tile = await fetch_tile(viewer, patched, 0, 0)
+        # The robot's own updates may patch the same tile first (a loaded machine delays ours): the
+        # tile's revisions until ours has landed.
+        seen = meta
+        for _ in range(20):
+            seen = (await receive_until(ws, update_of(
+                OVERLAY_GLOBAL_COSTMAP_KEY, lambda m, rev=seen["tiles"][0][0]: m["tiles"][0][0] > rev),
+                timeout=10))["msg"]
+            assert seen["version"] == meta["version"]
+            tile = await fetch_tile(viewer, seen, 0, 0)
+            if tile[world.height - 1, 0:2].tolist() == [100, 42]:
+                break
         assert tile[world.height - 1, 0:3].tolist() == [100, 42, 255]
     finally:
         await ws.disconnect()
