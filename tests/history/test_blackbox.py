@@ -187,7 +187,11 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
     seqs = await sync_to_async(lambda: sorted(d["header"]["seq"] for d in kept.values_list("data", flat=True)))()
     # The minute before and what came after the restart are there, every message numbered in between too:
     # what the first black box took it wrote on stopping, and the second one picked the incident up.
-    assert len(seqs) >= 30 and seqs == list(range(seqs[0], seqs[-1] + 1))
+    # (Both hear the robot for a moment at the handover: a loaded machine can store a message of that
+    # moment twice, never lose one.)
+    unique = sorted(set(seqs))
+    assert len(unique) >= 30 and unique == list(range(unique[0], unique[-1] + 1))
+    assert len(seqs) - len(unique) <= 2, seqs
     stamps = await sync_to_async(lambda: sorted(a.timestamp() for a in kept.values_list("received_at", flat=True)))()
     assert stamps[0] - incident.start < 0.5 and incident.end - stamps[-1] < 0.5
 
