@@ -141,6 +141,16 @@ def admin_user(db):
     return _user("ada", Role.ADMIN)
 
 
+@pytest.fixture
+def admin_logged_in(admin_user):
+    """Django's test client, logged in as the admin (for the admin site's pages)."""
+    from django.test import Client
+
+    client = Client()
+    client.force_login(admin_user)
+    return client
+
+
 def _api_client(user=None):
     from rest_framework.test import APIClient
 

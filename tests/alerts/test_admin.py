@@ -6,40 +6,32 @@ from __future__ import annotations
 import json
 
 import pytest
-from django.test import Client
 
 from robot.alerts.models import KINDS, Webhook
 
 pytestmark = pytest.mark.django_db
 
 
-@pytest.fixture
-def admin_client(admin_user) -> Client:
-    client = Client()
-    client.force_login(admin_user)
-    return client
-
-
-def test_it_offers_the_kinds_as_choices_and_refuses_others(admin_client):
-    page = admin_client.get("/admin/alerts/webhook/add/").content.decode()
+def test_it_offers_the_kinds_as_choices_and_refuses_others(admin_logged_in):
+    page = admin_logged_in.get("/admin/alerts/webhook/add/").content.decode()
     for kind, label in KINDS.items():
         assert f'value="{kind}"' in page and label in page
     form = {"name": "chat", "url": "http://127.0.0.1:9/hook", "enabled": "on", "min_severity": "warning"}
-    refused = admin_client.post("/admin/alerts/webhook/add/", {**form, "kinds": ["estop", "battery low"]})
+    refused = admin_logged_in.post("/admin/alerts/webhook/add/", {**form, "kinds": ["estop", "battery low"]})
     assert refused.status_code == 200 and "Select a valid choice" in refused.content.decode()
     assert not Webhook.objects.exists()
-    kept = admin_client.post("/admin/alerts/webhook/add/", {**form, "kinds": ["estop", "offline"]})
+    kept = admin_logged_in.post("/admin/alerts/webhook/add/", {**form, "kinds": ["estop", "offline"]})
     assert kept.status_code == 302
     assert sorted(Webhook.objects.get().kinds) == ["estop", "offline"]
 
 
-def test_it_sends_a_test_message_and_reports_the_outcome(admin_client, http_server):
+def test_it_sends_a_test_message_and_reports_the_outcome(admin_logged_in, http_server):
     port = http_server.server_address[1]
     good = Webhook.objects.create(name="chat", url=f"http://127.0.0.1:{port}/hook", kinds=["estop"])
     broken = Webhook.objects.create(name="gone", url=f"http://127.0.0.1:{port}/gone")
 
     def send_test(hook: Webhook) -> list[str]:
-        answer = admin_client.post("/admin/alerts/webhook/", {"action": "send_test", "_selected_action": [hook.pk]},
+        answer = admin_logged_in.post("/admin/alerts/webhook/", {"action": "send_test", "_selected_action": [hook.pk]},
                                    follow=True)
         return [str(m) for m in answer.context["messages"]]
 
