@@ -161,6 +161,7 @@ class Driver:
             await ensure_motors_on("driving")
         except MotorsOff as exc:
             await self.session.halt()
+            await self._refuse_if_latched()  # the stop turned them off: it is the reason to give
             await self._refuse("motors_off", exc)
 
     async def _refuse(self, reason: object, error: RobotError) -> None:

@@ -86,3 +86,25 @@ async def test_a_hung_robot_is_not_handed_the_drive_lock(frozen_link, sim_proces
     await ws.send_json_to({"type": "acquire"})
     await lock_frame(ws, lambda f: f["you"])
     await ws.disconnect()
+
+
+async def test_a_key_that_meets_the_stop_before_its_lock_news_is_refused_for_the_stop(link, sim, operator):
+    """The E-STOP turns the motors off; a key still held by the driver, arriving before the news that
+    the lock was taken, is refused for the stop (its true reason), audited once."""
+    from robot.commands.latch import aengage, arelease
+
+    ws = await drive_socket(operator)
+    await ws.send_json_to(key(0.5))
+    await wait_twist(sim, is_moving)
+    await aengage(by="olga")  # the latch alone: no lock event reaches this driver
+    try:
+        await motors(sim, False)
+        for _ in range(3):
+            await ws.send_json_to(key(0.5))
+            refused = await error_frame(ws)
+            assert refused["code"] == "estop" and "E-STOP engaged by olga" in refused["message"], refused
+        assert await AuditEntry.objects.filter(action="teleop.input", ok=False).acount() == 1
+    finally:
+        await arelease(by="olga")
+        await motors(sim, True)
+    await ws.disconnect()
