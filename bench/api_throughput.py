@@ -1,6 +1,6 @@
 """REST API under load, through the real stack (simulator + Daphne, embedded).
 
-1. ``GET /api/robot/state/`` with a token, 50 connections kept alive, for 20 s:
+1. ``GET /api/robot/state/`` with a token, 10 connections kept alive, for 20 s:
    ``state_api_rps``, ``state_api_p99_ms`` (and p50), with the server's CPU and the load average.
    The load comes from wrk (C, ``make wrk``) so the client does not measure itself; without wrk,
    from an aiohttp client in this process (``state_api_client`` says which).
@@ -45,7 +45,7 @@ from tests.stack import PASSWORD, Stack  # noqa: E402
 UNTHROTTLED = {"COMMAND_THROTTLE_RATE": "100000/min", "READ_THROTTLE_PER_S": "0"}
 log = logging.getLogger("bench.api_throughput")
 
-CONNECTIONS = 50
+CONNECTIONS = 10
 DURATION_S = 20.0
 SPEECH_N = 200
 
@@ -121,10 +121,10 @@ def profile(pid: int, name: str) -> subprocess.Popen | None:
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
-def state_api(stack: Stack, token: str) -> None:
-    url = f"{stack.url}/api/robot/state/"
+def state_api(stack: Stack, token: str, name: str = "state_api", query: str = "") -> None:
+    url = f"{stack.url}/api/robot/state/{query}"
     call_get(url, token)  # the first request checks the token against the database and caches it
-    spy = profile(stack.web.pid, "state_api")
+    spy = profile(stack.web.pid, name)
     cpu0, t0 = cpu_seconds(stack.web.pid), time.monotonic()
     if shutil.which("wrk"):
         figures, client = wrk(url, token), "wrk"
@@ -136,15 +136,15 @@ def state_api(stack: Stack, token: str) -> None:
     cpu = cpu_s / (time.monotonic() - t0) * 100
     if spy is not None:
         spy.wait()
-    print(f"state_api_client: {client}")
-    print(f"state_api_rps: {figures['rps']:.0f}")
-    print(f"state_api_p50_ms: {figures['p50']:.1f}")
-    print(f"state_api_p99_ms: {figures['p99']:.1f}")
-    print(f"state_api_errors: {figures['errors']:.0f}")
-    print(f"state_api_server_cpu_pct: {cpu:.0f}")
+    print(f"{name}_client: {client}")
+    print(f"{name}_rps: {figures['rps']:.0f}")
+    print(f"{name}_p50_ms: {figures['p50']:.1f}")
+    print(f"{name}_p99_ms: {figures['p99']:.1f}")
+    print(f"{name}_errors: {figures['errors']:.0f}")
+    print(f"{name}_server_cpu_pct: {cpu:.0f}")
     # The server's CPU per request: what the load average does not blur.
-    print(f"state_api_server_cpu_ms_per_request: {cpu_s * 1000 / max(1.0, figures['rps'] * DURATION_S):.2f}")
-    print(f"state_api_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
+    print(f"{name}_server_cpu_ms_per_request: {cpu_s * 1000 / max(1.0, figures['rps'] * DURATION_S):.2f}")
+    print(f"{name}_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
 
 
 def call_get(url: str, token: str) -> dict:
@@ -184,8 +184,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", choices=("state", "command"), help="run one part of the bench")
     parser.add_argument("--compare", action="store_true",
-                        help="also send the commands through Django (a query string keeps them off the fast "
-                             "path), printed as command_django_*")
+                        help="also send the reads and the commands through Django (a query string keeps them off "
+                             "the shortcuts), printed as state_django_* and command_django_*")
     args = parser.parse_args()
     only = args.only
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
@@ -195,6 +195,8 @@ def main() -> None:
         if only != "command":
             log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
             state_api(stack, token)
+            if args.compare:
+                state_api(stack, token, "state_django", "?via=django")
         if only == "state":
             return
         routes = [("command", "")] + ([("command_django", "?via=django")] if args.compare else [])
