@@ -20,10 +20,12 @@ class RobotConfig(AppConfig):
         from robot.introspection import tracking  # noqa: F401
         from robot.link import audio, watching
         from robot.link.hosting import register_background
+        from robot.link.releases import LINK_HOOKS
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
         from robot.overlays import link as overlays
         from robot.uplink import hosting as uplink
 
+        LINK_HOOKS.register_check()
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()
         watching.install()  # any topic a page opens: leases, echo, listing and rates

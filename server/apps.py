@@ -1,11 +1,10 @@
 from django.apps import AppConfig
-from django.core import checks
 
 
 class ServerConfig(AppConfig):
     name = "server"
 
     def ready(self) -> None:
-        from server.patches.releases import check_patched_server_releases
+        from server.patches.releases import SERVER_PATCHES
 
-        checks.register(check_patched_server_releases)
+        SERVER_PATCHES.register_check()

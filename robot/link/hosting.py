@@ -21,6 +21,7 @@ from robot.link import direct
 from robot.link.bus import aping_over_queue
 from robot.link.connection import RobotLink
 from robot.link.lease import Lease
+from robot.link.releases import LINK_HOOKS
 from robot.live import queues
 from robot.live.state import get_store
 from robot.supervisor import cancel_and_wait, supervise
@@ -101,6 +102,7 @@ def autostart_in_daphne() -> None:
         return
     reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)
     if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
+        LINK_HOOKS.refuse_others()
         reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
 
 

@@ -15,9 +15,9 @@ def install() -> None:
     from daphne.ws_protocol import WebSocketProtocol
 
     from server.patches import direct_frames, reaping, refused_handshakes
-    from server.patches.releases import refuse_other_releases
+    from server.patches.releases import SERVER_PATCHES
 
-    refuse_other_releases()
+    SERVER_PATCHES.refuse_others()
     # Same autobahn ordering issue as the robot link (robot/link/rosclient.py): without a class
     # default, browsers' websockets keep Nagle on and small frames stall on delayed ACKs.
     WebSocketProtocol.tcpNoDelay = True

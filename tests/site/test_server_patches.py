@@ -10,18 +10,18 @@ import inspect
 import pytest
 from django.core import checks
 
-from server.patches import releases as server_versions
+from server.patches.releases import SERVER_PATCHES
 
 
 def test_the_installed_releases_are_the_patched_ones():
-    assert server_versions.other_releases() == {}
-    server_versions.refuse_other_releases()
+    assert SERVER_PATCHES.others() == {}
+    SERVER_PATCHES.refuse_others()
 
 
 def test_another_release_is_refused_at_start_and_by_the_checks(monkeypatch):
-    monkeypatch.setitem(server_versions.PATCHED_RELEASES, "twisted", "1.0")
-    with pytest.raises(RuntimeError, match=r"twisted 26\.10\.0 \(the patches are for 1\.0\)"):
-        server_versions.refuse_other_releases()
+    monkeypatch.setitem(SERVER_PATCHES.releases, "twisted", "1.0")
+    with pytest.raises(RuntimeError, match=r"twisted 26\.10\.0 is installed, but the server patches are for 1\.0"):
+        SERVER_PATCHES.refuse_others()
     assert [e.id for e in checks.run_checks() if e.id == "server.E001"] == ["server.E001"]
 
 

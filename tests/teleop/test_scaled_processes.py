@@ -160,7 +160,7 @@ def test_a_link_whose_stop_overruns_its_deadline_exits_with_every_threads_stack_
         scaled.redis.proc.send_signal(signal.SIGCONT)
     said = scaled.log("link")[logged:]
     assert returncode == 1, said
-    assert "its stop overran 0.3 s; exiting" in said and "Thread MainThread:" in said, said
-    assert "Stack for <Task" in said, said
+    assert "exiting within 0.3 s" in said, said
+    assert "Timeout (0:00:00.300000)!" in said and "(most recent call first)" in said, said  # faulthandler's
     scaled.start_link()
     scaled.wait_robot_online(timeout=30)

@@ -1,12 +1,9 @@
 import asyncio
-import io
+import faulthandler
 import logging
 import os
 import signal
 import socket
-import sys
-import threading
-import traceback
 from collections.abc import Awaitable
 from typing import Any
 
@@ -16,6 +13,7 @@ from django.core.management.base import BaseCommand
 from robot.link import direct
 from robot.link.hosting import start_link, stop_link
 from robot.link.lease import Lease
+from robot.link.releases import LINK_HOOKS
 from robot.link.standby import StandbyStop
 from robot.live.state import redis_key
 from robot.supervisor import cancel_and_wait, supervise
@@ -30,6 +28,7 @@ class Command(BaseCommand):
             "With REDIS_URL, several may run: they share a lease and only its holder connects.")
 
     def handle(self, *args: Any, **options: Any) -> None:
+        LINK_HOOKS.refuse_others()
         asyncio.run(self._run())
         self._say("Robot link stopped.")
 
@@ -39,9 +38,7 @@ class Command(BaseCommand):
 
     def _stop_requested(self, stop: asyncio.Event) -> None:
         if not stop.is_set():
-            deadline = settings.ROBOT_LINK_STOP_DEADLINE_S
-            log.info("robot link: stop requested; exiting within %g s", deadline)
-            _exit_unless_done_within(deadline, asyncio.get_running_loop())
+            _exit_unless_done_within(settings.ROBOT_LINK_STOP_DEADLINE_S)
             stop.set()
 
     async def _run(self) -> None:
@@ -108,27 +105,15 @@ async def _standing_by(lease: Lease) -> None:
         await cancel_and_wait([stopper], 3)
 
 
-def _exit_unless_done_within(seconds: float, loop: asyncio.AbstractEventLoop) -> None:
-    """Past ``seconds``: every thread's stack and every task's on ``loop`` to the log, then exit. The stop's
-    waits are bounded but can add up past the deadline (Redis frozen during the hand-over), and no timeout
-    in the loop ends a call that blocks it or a hung worker thread (a rosbridge close, a database write)
-    that the interpreter waits for at exit; a process manager would kill it later, without a word."""
-
-    def overran() -> None:
-        names = {thread.ident: thread.name for thread in threading.enumerate()}
-        stacks = "".join(f"\nThread {names.get(ident, ident)}:\n{''.join(traceback.format_stack(frame))}"
-                         for ident, frame in sys._current_frames().items())
-        tasks = io.StringIO()
-        for task in asyncio.all_tasks(loop):
-            task.print_stack(file=tasks)
-        log.error("robot link: its stop overran %g s; exiting. Where each thread was:%s\nWhat each task awaited:\n%s",
-                  seconds, stacks, tasks.getvalue())
-        sys.stdout.flush()
-        os._exit(1)
-
-    watchdog = threading.Timer(seconds, overran)
-    watchdog.daemon = True
-    watchdog.start()
+def _exit_unless_done_within(seconds: float) -> None:
+    """Past ``seconds``: every thread's stack to stderr (faulthandler), then exit 1. The stop's waits are
+    bounded but can add up past the deadline (Redis frozen during the hand-over), and no timeout in the
+    loop ends a call that blocks it or a hung worker thread (a rosbridge close, a database write) that
+    the interpreter waits for at exit; a process manager would kill it later, without a word. So it is
+    never cancelled: the stop is over only when the process has exited."""
+    log.info("robot link: stop requested; exiting within %g s (past that, a traceback of every thread "
+             "follows on stderr)", seconds)
+    faulthandler.dump_traceback_later(seconds, exit=True)
 
 
 async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
