@@ -17,6 +17,7 @@ from history.access import refusal, refused_topics
 from robot import interface as ri
 from robot.commands.reconnect import reconnect
 from robot.link.bus import RobotError
+from robot.link.topicwatch import TopicRefused, local_watches
 from robot.link.watching import ECHO_PREFIX, echo_key, is_echo_key
 from robot.live.feed import alocal_hub, keeps_every_message
 from robot.live.frames import status_text, update_fragment
@@ -24,7 +25,6 @@ from robot.live.groups import STATUS_KEY
 from robot.live.hub import FRAMES_EXTENSION
 from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
 from robot.live.state import get_store
-from robot.live.topicwatch import TopicRefused, local_watches
 
 log = logging.getLogger(__name__)
 

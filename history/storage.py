@@ -24,7 +24,7 @@ from django.db.models import BigIntegerField, ExpressionWrapper, F
 from cyborg_site.text import scrub
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
-from robot.link.wire import jsonable
+from robot.live.state import jsonable
 
 log = logging.getLogger(__name__)
 

@@ -17,8 +17,9 @@ class RobotConfig(AppConfig):
 
         # Wherever the link runs: the map renderer, the goal tracker, where the robot is,
         # the state machine graph and the diagnostics.
+        from robot.audio import link as audio
         from robot.introspection import tracking  # noqa: F401
-        from robot.link import audio, watching
+        from robot.link import watching
         from robot.link.hosting import register_background
         from robot.link.releases import LINK_HOOKS
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401

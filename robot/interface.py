@@ -80,7 +80,7 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("text_to_speech", "/cyborg_audio/text_to_speech", "std_msgs/String", None, True, recent=10),
     _T("tts_feedback", "/cyborg_audio/feedback_text_to_speech", "std_msgs/String", None, True, recent=10),
     _T("playback_feedback", "/cyborg_audio/feedback_playback", "std_msgs/String", None, True),
-    # the robot's microphone: subscribed only while someone listens (robot/link/audio.py)
+    # the robot's microphone: subscribed only while someone listens (robot/audio/link.py)
     _T("audio", "/audio/audio", "audio_common_msgs/AudioData"),
     _T("audio_info", "/audio/audio_info", "audio_common_msgs/AudioInfo", None, True, latched=True),
     _T("current_location", "/cyborg_navigation/current_location", "std_msgs/String", None, True),

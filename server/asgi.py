@@ -15,6 +15,7 @@ from dashboard.routing import websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
 from robot.api.fast_state import FastStateApp  # noqa: E402
 from robot.link.hosting import autostart_in_daphne  # noqa: E402
+from robot.teleop.session import halt_all  # noqa: E402
 from server import patches as server_patches  # noqa: E402
 from server.gc_policy import freeze_when_running_in_daphne  # noqa: E402
 from server.read_throttle import ReadThrottle  # noqa: E402
@@ -29,6 +30,6 @@ application = ProtocolTypeRouter(
 )
 
 server_patches.install()  # for the releases they were made for only
-autostart_in_daphne()
+autostart_in_daphne(halt_drivers=halt_all)
 freeze_when_running_in_daphne()
 install_in_daphne()  # SIGTERM: stop listening, finish the requests in flight, then stop

@@ -32,12 +32,12 @@ from typing import Any
 from channels.db import database_sync_to_async
 from django.conf import settings
 
+from robot.audio.link import LISTEN_RENEW_S
 from robot.audio.mic import Unplayable, playback_format
 from robot.audio.pcm import Pacer, chunk_problem, format_problem
 from robot.audio.talk import TalkEvent, announce_talker, get_talk_lock, talk_view
 from robot.commands.audit import audit_record
 from robot.commands.pipeline import Busy, InvalidCommand, arun_command
-from robot.link.audio import LISTEN_RENEW_S
 from robot.link.bus import RobotError, apublish, arequest
 from robot.live.locks import HeldLock, Holder
 from robot.live.state import get_store
@@ -168,7 +168,7 @@ class AudioSession:
             await self.send_json({"type": "listening", "on": False})
 
     async def on_mic(self, event: dict[str, Any]) -> None:
-        """What the microphone group hears (``robot.link.audio``), passed on while listening."""
+        """What the microphone group hears (``robot.audio.link``), passed on while listening."""
         if self.listening_since is None:
             return
         if event["type"] == "audio.mic":

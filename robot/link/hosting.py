@@ -94,26 +94,24 @@ async def probe_command_path(link: RobotLink) -> None:
         await asyncio.sleep(PROBE_INTERVAL_S)
 
 
-def autostart_in_daphne() -> None:
-    """In the Daphne server: stop the robot before exiting (SIGTERM) and, in the embedded
-    default, start the link once the reactor runs."""
+def autostart_in_daphne(*, halt_drivers: Callable[[], Awaitable[int]]) -> None:
+    """In the Daphne server: stop the robot before exiting (SIGTERM: ``halt_drivers`` sends every
+    driver's zero, then the link stops) and, in the embedded default, start the link once the reactor runs."""
     reactor = daphne_reactor()
     if reactor is None:
         return
-    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit)
+    reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit, halt_drivers)
     if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
         LINK_HOOKS.refuse_others()
         reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
 
 
-def _stop_robot_before_exit() -> object:
+def _stop_robot_before_exit(halt_drivers: Callable[[], Awaitable[int]]) -> object:
     from twisted.internet.defer import Deferred
-
-    from robot.teleop.session import halt_all
 
     async def stop() -> None:
         try:
-            stopped = await asyncio.wait_for(halt_all(), 2)
+            stopped = await asyncio.wait_for(halt_drivers(), 2)
             if stopped:
                 log.warning("shutting down: sent zero for %d driver(s)", stopped)
         except Exception:

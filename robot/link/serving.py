@@ -24,7 +24,7 @@ log = logging.getLogger(__name__)
 REPLY_MARGIN_S = 0.3
 _NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "estop_release"})  # answered at once
 
-# Extra link operations other modules add (e.g. robot/link/audio.py): (link, request) -> reply,
+# Extra link operations other modules add (e.g. robot/audio/link.py): (link, request) -> reply,
 # the link being the whole RobotLink (robot.link.connection), which is built on this layer.
 Operation = Callable[[Any, LinkRequest], Awaitable[LinkReply]]
 _operations: dict[str, Operation] = {}

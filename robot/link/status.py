@@ -7,7 +7,10 @@ import asyncio
 import logging
 import re
 import time
+from typing import Any, Protocol
 from urllib.parse import urlsplit
+
+from django.conf import settings
 
 from robot.link.core import LinkCore
 from robot.live.announce import aannounce, aannounce_status, server_update
@@ -15,7 +18,6 @@ from robot.live.groups import LATCH_KEY, LinkStatus
 from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S
 from robot.supervisor import failing
-from robot.uplink.hosting import uplink_status
 
 log = logging.getLogger(__name__)
 
@@ -26,6 +28,23 @@ LATCH_SETTLE_S = 3.0  # a stop's store write normally lands within milliseconds
 # /rosout, as an error from its own node naming the request id roslibpy gave it.
 ROSBRIDGE_NODE = "/rosbridge_websocket"
 _FAILED_SUBSCRIBE = re.compile(r"\[id: subscribe:(?P<topic>/[^\]]*?):\d+\] subscribe: (?P<error>.*)", re.S)
+
+
+class HostedUplink(Protocol):
+    def status(self) -> dict[str, Any]: ...
+
+
+# The uplink endpoint this process hosts, if any (robot.uplink.hosting sets it while it serves).
+uplink_endpoint: HostedUplink | None = None
+
+
+def uplink_status() -> dict[str, Any] | None:
+    """For the link's status: None when this server dials the robot itself."""
+    if not settings.UPLINK:
+        return None
+    if uplink_endpoint is None:
+        return {"connected": False, "why": "the uplink endpoint is not running in the link's process"}
+    return uplink_endpoint.status()
 
 
 class Upkeep(LinkCore):

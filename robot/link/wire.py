@@ -1,4 +1,4 @@
-"""Decoding large rosbridge frames fast, and encoding what they decode to.
+"""Decoding large rosbridge frames fast.
 
 A 4000 x 4000 map arrives as one ~32 MB JSON text frame whose ``data`` is 16 million
 integers. ``json.loads`` turns that into 16 million Python ints (~0.7 s) that numpy then
@@ -111,12 +111,3 @@ def _put(node: Any, value: Any) -> bool:
     elif isinstance(node, list):
         return any(_put(item, value) for item in node)
     return False
-
-
-def jsonable(value: Any) -> Any:
-    """``default`` for ``json.dumps``: decoded arrays back to lists (when someone records the map)."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"Object of type {type(value).__name__} is not JSON serializable")

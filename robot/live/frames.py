@@ -10,8 +10,7 @@ import json
 from collections.abc import Iterable
 from typing import Any
 
-from robot.link.wire import jsonable
-from robot.live.state import status_view
+from robot.live.state import jsonable, status_view
 
 _COMPACT = (",", ":")
 

@@ -11,11 +11,20 @@ import time
 from collections import deque
 from typing import Any, Protocol
 
+import numpy as np
 from django.conf import settings
 
-from robot.link.wire import jsonable
 from robot.live import redis_clients
 from robot.live.groups import STATUS_KEY
+
+
+def jsonable(value: Any) -> Any:
+    """``default`` for ``json.dumps``: arrays the link decoded (a large map's data) back to lists."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"Object of type {type(value).__name__} is not JSON serializable")
 
 
 class StateStore(Protocol):

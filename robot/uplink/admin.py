@@ -6,8 +6,8 @@ from django.contrib import admin, messages
 from django.db.models import QuerySet
 from django.http import HttpRequest
 
+from robot.models import UplinkCredential
 from robot.uplink.credentials import credential_issue, credential_revoke, credential_rotate
-from robot.uplink.models import UplinkCredential
 
 _SHOWN_ONCE = "Copy it into the robot's uplink environment now (UPLINK_CREDENTIAL); it is not shown again: "
 

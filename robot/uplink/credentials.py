@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from django.utils import timezone
 
-from robot.uplink.models import UplinkCredential
+from robot.models import UplinkCredential
 
 PREFIX = "cyu"
 

@@ -8,11 +8,9 @@ from typing import Any
 
 from django.conf import settings
 
+from robot.link import status
 from robot.uplink.endpoint import UplinkEndpoint
 from robot.uplink.relays import Relays
-
-# The endpoint this process hosts, if any: the link's status names the uplink through it.
-current: UplinkEndpoint | None = None
 
 
 def make_endpoint() -> UplinkEndpoint:
@@ -26,25 +24,15 @@ def make_endpoint() -> UplinkEndpoint:
 
 
 async def serve_uplink(link: Any) -> None:
-    """A background service of the link: the endpoint, until cancelled."""
-    global current
+    """A background service of the link: the endpoint, until cancelled (the link's status names it)."""
     endpoint = make_endpoint()
     await endpoint.start()
-    current = endpoint
+    status.uplink_endpoint = endpoint
     try:
         while True:  # (a timer the loop holds: the embedded server keeps no reference to this task)
             await asyncio.sleep(3600)
     finally:
-        if current is endpoint:
-            current = None
+        if status.uplink_endpoint is endpoint:
+            status.uplink_endpoint = None
         await asyncio.shield(endpoint.stop())
-
-
-def uplink_status() -> dict[str, Any] | None:
-    """For the link's status: None when this server dials the robot itself."""
-    if not settings.UPLINK:
-        return None
-    if current is None:
-        return {"connected": False, "why": "the uplink endpoint is not running in the link's process"}
-    return current.status()
 

@@ -7,8 +7,8 @@ import pytest
 from robot import interface as ri
 from robot.link import connection as link_module
 from robot.link import watching
+from robot.link.topicwatch import LocalWatches, TopicRefused
 from robot.link.watching import echo_key, watches_of
-from robot.live.topicwatch import LocalWatches, TopicRefused
 from tests.helpers import async_wait_until, receive_frame, receive_until, ws_communicator
 
 TF = ri.topic("tf").name  # in the registry, but nothing subscribes to it until someone watches

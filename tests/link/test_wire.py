@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from robot.link import wire
-from robot.link.wire import decode_frame, jsonable, parse_int_array
+from robot.link.wire import decode_frame, parse_int_array
+from robot.live.state import jsonable
 
 MAP = "/map"
 ARRAYS = frozenset({MAP})

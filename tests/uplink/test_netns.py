@@ -70,7 +70,7 @@ class World:
 
     def credential(self, *, revoke: str = "") -> str:
         """A new credential's text (or revoke the credential with key id ``revoke``)."""
-        code = ("from robot.uplink.credentials import *\nfrom robot.uplink.models import UplinkCredential\n" + (
+        code = ("from robot.models import UplinkCredential\nfrom robot.uplink.credentials import *\n" + (
             f"credential_revoke(credential=UplinkCredential.objects.get(key_id={revoke!r}))\n" if revoke else
             "print(credential_create(robot='cyborg', label='netns')[1])\n"))
         out = self.stack.manage("shell", "-c", code).strip()
@@ -363,7 +363,7 @@ def test_a_revoked_credential_closes_the_live_uplink_within_a_second_and_is_refu
     world.credential(revoke=key_id)
     world.agent.wait_log("uplink lost", after=logged, timeout=5)
     world.agent.wait_log("the server refused the uplink", after=logged, timeout=10)
-    code = ("from robot.models import AuditEntry\nfrom robot.uplink.models import UplinkCredential\n"
+    code = ("from robot.models import AuditEntry, UplinkCredential\n"
             f"revoked = UplinkCredential.objects.get(key_id={key_id!r}).revoked\n"
             "gone = AuditEntry.objects.filter(action='uplink.disconnect', created__gte=revoked).earliest('created')\n"
             "refused = AuditEntry.objects.filter(action='uplink.refuse', created__gte=revoked).count()\n"
