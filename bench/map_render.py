@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 from robot import interface as ri  # noqa: E402
 from robot.link.wire import decode_frame  # noqa: E402
 from robot.navigation.mapimage import render_map  # noqa: E402
-from robot.sim import messages, world  # noqa: E402
+from simulator import messages, world  # noqa: E402
 from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, login  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 

@@ -1,6 +1,6 @@
 """How many messages/s the simulator delivers to 1 and to 20 rosbridge subscribers.
 
-Starts ``python -m robot.sim`` in a subprocess (so the clients here do not share its GIL),
+Starts ``python -m simulator`` in a subprocess (so the clients here do not share its GIL),
 connects raw websocket subscribers, injects counted bursts through ``POST /sim/publish`` and
 times until every subscriber has every message. Prints ``name: value`` lines.
 """
@@ -26,7 +26,7 @@ PHASE_TIMEOUT_S = 10.0
 
 def start_simulator() -> tuple[subprocess.Popen[str], str, int]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "robot.sim", "--port", "0", "--video-port", "0", "--quiet", "--startup-s", "1"],
+        [sys.executable, "-m", "simulator", "--port", "0", "--video-port", "0", "--quiet", "--startup-s", "1"],
         cwd=ROOT, stdout=subprocess.PIPE, text=True,
     )
     assert proc.stdout is not None

@@ -65,7 +65,7 @@ class World:
                            web_port=self.stack.web_port)
         self.stack.env.update(self.front.web_env())
         self.stack.start()
-        self.sim = self.side.spawn([PYTHON, "manage.py", "simrobot", "--host", "127.0.0.1", "--port",
+        self.sim = self.side.spawn([PYTHON, "-m", "simulator", "--host", "127.0.0.1", "--port",
                                     str(self.sim_port), "--video-port", str(self.video_port), "--startup-s", "0.5"],
                                    self.stack.tmp / "sim.log", self.stack.env)
         self.side.wait_port(self.sim_port)

@@ -8,7 +8,7 @@
 set -u
 bin=$1 port=$2 sim_port=$3 video_port=$4 rosbridge_url=$5 video_url=$6
 
-"$bin/python" manage.py simrobot --port "$sim_port" --video-port "$video_port" &
+"$bin/python" -m simulator --port "$sim_port" --video-port "$video_port" &
 sim=$!
 ROSBRIDGE_URL=$rosbridge_url VIDEO_URL=$video_url "$bin/daphne" -b 127.0.0.1 -p "$port" server.asgi:application &
 web=$!

@@ -109,7 +109,7 @@ names() {
 
 launch() {
   case $1 in
-    sim) start sim "$BIN/python" manage.py simrobot --port "$SIM_PORT" --video-port "$VIDEO_PORT" ${STACK_SIM_ARGS:-} ;;
+    sim) start sim "$BIN/python" -m simulator --port "$SIM_PORT" --video-port "$VIDEO_PORT" ${STACK_SIM_ARGS:-} ;;
     link-a | link-b) start "$1" env ROBOT_LINK_NAME="$1" "$BIN/python" manage.py robotlink ;;
     web-a) start web-a "$BIN/daphne" -b 127.0.0.1 -p "$WEB_A" server.asgi:application ;;
     web-b) start web-b "$BIN/daphne" -b 127.0.0.1 -p "$WEB_B" server.asgi:application ;;

@@ -18,7 +18,7 @@ from collections import defaultdict
 HZ = os.sysconf("SC_CLK_TCK")
 KINDS = [
     ("chromium", r"chromium"), ("playwright", r"playwright/driver"), ("daphne", r"daphne"),
-    ("simulator", r"simrobot"), ("robot link", r"robotlink"), ("celery", r"celery"), ("mypy", r"mypy"),
+    ("simulator", r"-m simulator"), ("robot link", r"robotlink"), ("celery", r"celery"), ("mypy", r"mypy"),
     ("ruff", r"ruff"), ("nginx", r"nginx"), ("redis", r"redis-server"), ("postgresql", r"postgres"),
     ("pytest worker", r"exec\(eval\(sys.stdin"), ("pytest", r"pytest"), ("manage.py", r"manage\.py"),
     ("install", r"\buv\b|\bpip\b|apt"), ("make, shells", r"^(make|bash|sh) "),

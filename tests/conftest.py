@@ -249,7 +249,7 @@ def _fresh_layer_and_store(_private_redis_prefix):
 @pytest.fixture
 def sim():
     """A simulated Cyborg on a free port, in a thread of its own."""
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     with SimThread(port=0, video_port=0, startup_s=0.5) as running:
         yield running

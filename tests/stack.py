@@ -111,7 +111,7 @@ class Stack:
         return proc
 
     def start_sim(self) -> subprocess.Popen:
-        proc = self._spawn([PYTHON, "manage.py", "simrobot", "--port", str(self.sim_port),
+        proc = self._spawn([PYTHON, "-m", "simulator", "--port", str(self.sim_port),
                             "--video-port", str(self.video_port), *self.sim_args], "sim")
         wait_for_port(self.sim_port, proc=proc)
         self.sim_proc = proc

@@ -20,7 +20,7 @@ pytestmark = pytest.mark.django_db(transaction=True)
 
 @pytest.fixture
 def sim():
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     with SimThread(port=0, video_port=0, startup_s=0.5, battery_soc=0.08) as running:
         yield running

@@ -66,7 +66,7 @@ def test_it_asks_anonymous_callers_to_authenticate(anon_api, operator_api, robot
 
 
 def test_it_answers_503_when_offline_and_fires_nothing_later(operator_api, sim, link_thread):
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     port = sim.port
     sim.stop()

@@ -11,7 +11,7 @@ import pytest
 from robot import interface as ri
 from robot.audio.mic import MAX_UNFRAMED
 from robot.live.state import get_store
-from robot.sim.audio import dominant_hz
+from simulator.audio import dominant_hz
 from tests.audio.support import audio_socket, kind
 from tests.helpers import async_wait_until
 
@@ -23,7 +23,7 @@ MIC = ri.topic("audio").name
 def sim(request):
     """A simulated robot whose microphone sends an mp3 stream (a 440 Hz tone unless the test's
     ``mic_tone_hz`` parameter says otherwise; 0 is silent, for tests that publish their own)."""
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     freq = getattr(request, "param", 440.0)
     with SimThread(port=0, video_port=0, startup_s=0.5, mic_coding="mp3", mic_tone_hz=freq) as running:

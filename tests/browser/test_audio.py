@@ -16,7 +16,7 @@ import roslibpy
 from playwright.sync_api import expect
 
 from robot import interface as ri
-from robot.sim.audio import dominant_hz
+from simulator.audio import dominant_hz
 from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, FULL_CHROMIUM, FULL_CHROMIUM_ARGS, fresh_page, login
 from tests.stack import Stack
 

@@ -15,7 +15,7 @@ from robot import interface as ri
 from robot.commands import modes
 from robot.commands.statewatch import StateWatch
 from robot.live.state import get_store
-from robot.sim.harness import SimThread
+from simulator.harness import SimThread
 from tests.commands.support import until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until
 

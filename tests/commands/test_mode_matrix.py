@@ -14,8 +14,8 @@ import pytest
 
 from robot import interface as ri
 from robot.commands import modes
-from robot.sim import statemachine
-from robot.sim.harness import SimThread
+from simulator import statemachine
+from simulator.harness import SimThread
 from tests.commands.support import until_the_server_hears, wait_ready
 
 B, D, M, S = ri.Mode.BEHAVIOUR, ri.Mode.DEMO, ri.Mode.MANUAL, ri.Mode.STOP

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from robot.sim.nodes import diagnostics as simdiag
+from simulator.nodes import diagnostics as simdiag
 
 CALM = simdiag.Reading(soc=0.8, voltage=25.4, recharge_state=0, motors=True, v=0.0, w=0.0, cmd_v=0.0, cmd_w=0.0,
                        front_bumped=False, rear_bumped=False, laser_nearest_m=2.0, laser_max_m=20.0,

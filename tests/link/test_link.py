@@ -60,7 +60,7 @@ async def test_it_coalesces_high_rate_topics_for_browsers(link, sim, viewer):
 
 
 async def test_it_shows_offline_and_resubscribes_when_the_robot_returns(link, sim, viewer):
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     communicator = await watch(viewer, BATTERY)
     await receive_until(communicator, lambda f: f["kind"] == "update", timeout=10)

@@ -27,7 +27,7 @@ def test_it_judges_a_robot_silent_past_the_hang_time_not_responding():
 @pytest.fixture
 def sim_process():
     port = free_port()
-    proc = subprocess.Popen([sys.executable, "manage.py", "simrobot", "--port", str(port), "--video-port", "0"],
+    proc = subprocess.Popen([sys.executable, "-m", "simulator", "--port", str(port), "--video-port", "0"],
                             cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         wait_for_port(port, proc=proc)

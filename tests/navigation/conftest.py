@@ -21,7 +21,7 @@ def _private_var_dir(settings, tmp_path):
 @pytest.fixture
 def sim():
     """The simulator with its world at 4 times the pace: goals are reached in a quarter of the time."""
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     with SimThread(port=0, video_port=0, startup_s=0.5, time_scale=4.0) as running:
         yield running

@@ -10,7 +10,7 @@ from robot.live.state import get_store
 from robot.models import AuditEntry
 from robot.navigation.handlers import map_meta
 from robot.navigation.mapimage import map_dir, render_map
-from robot.sim import world
+from simulator import world
 
 # Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
 # sits in a test transaction: these tests need real transactions.

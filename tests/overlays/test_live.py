@@ -21,7 +21,7 @@ from robot.live.groups import (
 )
 from robot.live.keys import OVERLAY_SOURCES
 from robot.overlays.link import overlays
-from robot.sim.world import OCCUPIED
+from simulator.world import OCCUPIED
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 pytestmark = pytest.mark.django_db(transaction=True)

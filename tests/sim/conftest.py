@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator
 import pytest
 import roslibpy
 
-from robot.sim.harness import SimThread
+from simulator.harness import SimThread
 from tests.sim.support import FAST, Raw
 
 

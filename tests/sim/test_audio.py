@@ -12,8 +12,8 @@ import pytest
 import roslibpy
 
 from robot import interface as ri
-from robot.sim.audio import Heard, Speaker, dominant_hz, tone
-from robot.sim.harness import SimThread
+from simulator.audio import Heard, Speaker, dominant_hz, tone
+from simulator.harness import SimThread
 from tests.helpers import wait_until
 from tests.sim.support import FAST, Inbox
 

@@ -7,8 +7,8 @@ from typing import Any
 import pytest
 
 from robot import interface as ri
-from robot.sim import SimRobot, SimThread
-from robot.sim.bus import Bus
+from simulator import SimRobot, SimThread
+from simulator.bus import Bus
 from tests.sim.support import FAST, Raw, on_topic, wait_until
 
 TEST_TOPIC = "/sim_test/heartbeat"

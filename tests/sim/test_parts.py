@@ -16,8 +16,8 @@ import pytest
 from websockets.sync.client import connect
 
 from robot import interface as ri
-from robot.sim import SimThread, messages, statemachine, world
-from robot.sim.bus import Clock
+from simulator import SimThread, messages, statemachine, world
+from simulator.bus import Clock
 from tests.sim.support import Raw, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -137,10 +137,10 @@ def test_it_restarts_on_the_same_port_and_clients_see_the_drop():
             assert '"result":true' in ws.recv(timeout=5)
 
 
-def test_it_runs_from_the_management_command():
+def test_it_runs_from_its_command_line():
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(
-        [sys.executable, "manage.py", "simrobot", "--port", "0", "--video-port", "0", "--startup-s", "0.2",
+        [sys.executable, "-m", "simulator", "--port", "0", "--video-port", "0", "--startup-s", "0.2",
          "--pose-rate", "5"], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout is not None

@@ -11,7 +11,7 @@ import roslibpy
 from roslibpy.ros1.actionlib import ActionClient, Goal
 
 from robot import interface as ri
-from robot.sim import SimThread, messages
+from simulator import SimThread, messages
 from tests.sim.support import FAST, Inbox, subscribe, wait_until
 
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from robot import interface as ri
-from robot.sim.harness import SimThread
-from robot.sim.laser import Laser
-from robot.sim.world import OCCUPIED, UNKNOWN, WorldMap, build
+from simulator.harness import SimThread
+from simulator.laser import Laser
+from simulator.world import OCCUPIED, UNKNOWN, WorldMap, build
 from tests.sim.support import Raw, on_topic
 
 

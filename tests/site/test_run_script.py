@@ -99,7 +99,7 @@ def test_the_server_keeps_running_when_the_simulator_dies():
         while not _robot_connected(web) and time.monotonic() < deadline:
             time.sleep(0.2)
         assert _robot_connected(web), out.read_text()[-3000:]
-        os.kill(_child_running(run.pid, "simrobot"), signal.SIGKILL)  # the simulator crashes
+        os.kill(_child_running(run.pid, "simulator"), signal.SIGKILL)  # the simulator crashes
         deadline = time.monotonic() + 60
         while _robot_connected(web) is not False and time.monotonic() < deadline:
             time.sleep(0.2)

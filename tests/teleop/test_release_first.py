@@ -15,7 +15,7 @@ pytestmark = pytest.mark.django_db(transaction=True)
 
 
 async def test_a_key_held_through_a_lost_link_moves_nothing_until_released_and_pressed_again(link, sim, operator):
-    from robot.sim.harness import SimThread
+    from simulator.harness import SimThread
 
     ws = await drive_socket(operator)
     frames: list[dict] = []

@@ -104,7 +104,7 @@ def world() -> Iterator[World]:
     sim = None
     try:
         stack.start()
-        sim = side.spawn([PYTHON, "manage.py", "simrobot", "--host", "127.0.0.1", "--port", str(sim_port),
+        sim = side.spawn([PYTHON, "-m", "simulator", "--host", "127.0.0.1", "--port", str(sim_port),
                           "--video-port", str(video_port), "--startup-s", "0.5"], stack.tmp / "sim.log", stack.env)
         side.wait_port(sim_port)
         # The boundary holds: nothing of the robot's is reachable from the server's side.

@@ -1,7 +1,7 @@
 """The Cyborg simulator: a rosbridge v2 websocket server that behaves like the robot.
 
 Plain Python (no Django): ``SimRobot`` is the asyncio server, ``SimThread`` runs one in a
-background thread. ``python manage.py simrobot`` is the command-line entry point.
+background thread. ``python -m simulator`` is the command-line entry point.
 """
 
 from .harness import SimThread

@@ -26,7 +26,7 @@ from PIL import Image, ImageDraw
 
 from .host import CameraHost
 
-log = logging.getLogger("robot.sim.camera")
+log = logging.getLogger("simulator.camera")
 
 BOUNDARY = "boundarydonotcross"
 FPS = 8.0

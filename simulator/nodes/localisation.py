@@ -1,4 +1,4 @@
-"""amcl's particle cloud (robot/sim/localisation.py)."""
+"""amcl's particle cloud (simulator/localisation.py)."""
 
 from __future__ import annotations
 

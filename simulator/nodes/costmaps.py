@@ -1,4 +1,4 @@
-"""move_base's costmaps (with their updates), footprint and local plan (robot/sim/costmaps.py)."""
+"""move_base's costmaps (with their updates), footprint and local plan (simulator/costmaps.py)."""
 
 from __future__ import annotations
 

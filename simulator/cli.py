@@ -1,4 +1,4 @@
-"""The simulator's command line, shared by ``python manage.py simrobot`` and ``python -m robot.sim``."""
+"""The simulator's command line (``python -m simulator``)."""
 
 from __future__ import annotations
 

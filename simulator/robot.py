@@ -41,7 +41,7 @@ from .server import RosbridgeServer
 from .statemachine import StateMachine
 from .world import Base, build
 
-log = logging.getLogger("robot.sim")
+log = logging.getLogger("simulator")
 N = TypeVar("N", bound=SimNode)
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 from . import messages
 
-log = logging.getLogger("robot.sim.rosbridge")
+log = logging.getLogger("simulator.rosbridge")
 
 RECEIVED_KEEP = 10_000
 _TYPE_RE = re.compile(r"^[A-Za-z][\w]*/[A-Za-z][\w]*$")

@@ -22,7 +22,7 @@ from robot import interface as ri
 from . import messages
 from .protocol import Broker, ServiceHandler
 
-log = logging.getLogger("robot.sim")
+log = logging.getLogger("simulator")
 
 Handler = Callable[[dict[str, Any]], object]
 TickFn = Callable[[float, float], None]  # (monotonic now, dt seconds)

@@ -1,4 +1,4 @@
-"""RosAria's laser topic, ray-cast against the world (robot/sim/laser.py)."""
+"""RosAria's laser topic, ray-cast against the world (simulator/laser.py)."""
 
 from __future__ import annotations
 

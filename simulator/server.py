@@ -12,7 +12,7 @@ from websockets.exceptions import ConnectionClosed
 from .host import BridgeHost
 from .protocol import Client
 
-log = logging.getLogger("robot.sim.server")
+log = logging.getLogger("simulator.server")
 
 
 class RosbridgeServer:
