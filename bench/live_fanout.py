@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import bisect
-import itertools
 import json
 import logging
 import os
@@ -323,37 +322,6 @@ def report(prefix: str, result: dict, sent: list[float]) -> None:
     print(f"{prefix}_loadavg: {result['load']:.1f}", flush=True)
 
 
-STAGES = ("stamp", "read", "recv", "loop", "drain", "hub", "flush", "written")
-
-
-def trace_report(prefix: str, result: dict) -> None:
-    """With LIVE_TRACE_FILE set (robot.live.trace): where the probe's time went inside the server."""
-    path = os.environ.get("LIVE_TRACE_FILE")
-    if not path or not Path(path).exists():
-        return
-    window = result["window"]
-    records = [r for r in map(json.loads, Path(path).read_text().splitlines()) if window[0] <= r["stamp"] < window[1]]
-    if not records:
-        return
-    for before, after in itertools.pairwise(STAGES):
-        gaps = sorted((r[after] - r[before]) * 1000 for r in records if before in r and after in r)
-        if gaps:
-            print(f"{prefix}_{before}_to_{after}_p50_ms: {quantile(gaps, 0.5):.2f}")
-            print(f"{prefix}_{before}_to_{after}_p99_ms: {quantile(gaps, 0.99):.2f}")
-    total = sorted((r["written"] - r["stamp"]) * 1000 for r in records)
-    print(f"{prefix}_stamp_to_written_p50_ms: {quantile(total, 0.5):.2f}")
-    print(f"{prefix}_stamp_to_written_p99_ms: {quantile(total, 0.99):.2f}")
-    flushed = {round(r["stamp"], 6): r["flush"] for r in records if "flush" in r}
-    arrivals = sorted((now - flushed[round(stamp, 6)]) * 1000 for samples in result["samples"]
-                      for stamp, now in samples if round(stamp, 6) in flushed)
-    if arrivals:
-        print(f"{prefix}_flush_to_client_p50_ms: {quantile(arrivals, 0.5):.2f}")
-        print(f"{prefix}_flush_to_client_p99_ms: {quantile(arrivals, 0.99):.2f}")
-    print(f"{prefix}_traced: {len(records)}", flush=True)
-    if os.environ.get("BENCH_DUMP"):
-        Path(os.environ["BENCH_DUMP"]).write_text(json.dumps({"records": records, "samples": result["samples"]}))
-
-
 def embedded_section(sizes: tuple[int, ...]) -> None:
     from teleop_latency import login
 
@@ -371,7 +339,6 @@ def embedded_section(sizes: tuple[int, ...]) -> None:
             log.info("embedded: %d clients through the product", n)
             result = drive([url], cookie, "watch", n, [stack.web.pid])
             report(f"fanout_{n}", result, reference.stamps)
-            trace_report(f"trace_{n}", result)
             log.info("embedded: %d clients straight to rosbridge", n)
             result = drive([f"ws://127.0.0.1:{stack.sim_port}"], "", "direct", n, [stack.sim_proc.pid])
             figures = summarise(result, reference.stamps)

@@ -215,8 +215,6 @@ if env_bool("STATIC_HASHED", False):
 # --- Redis: channel layer, Celery broker, latest-state store ---------------------------
 REDIS_URL = env_str("REDIS_URL")
 EMBEDDED = not REDIS_URL  # one process hosts the web server, the robot link and the sampling loop
-# Debugging aid: stage timestamps of the live probe key, one JSON line per update (robot.live.trace).
-LIVE_TRACE_FILE = env_str("LIVE_TRACE_FILE")
 if REDIS_URL:
     from redis.asyncio.retry import Retry
     from redis.backoff import NoBackoff

@@ -31,7 +31,6 @@ from twisted.python import threadable
 
 from cyborg_site.text import scrub_json
 from robot.link.wire import LARGE_FRAME_BYTES, decode_frame, may_hold_surrogates
-from robot.live import trace
 from robot.live.groups import LinkReply
 
 log = logging.getLogger(__name__)
@@ -56,8 +55,6 @@ class LinkProtocol(AutobahnRosBridgeProtocol):
 
     def onMessageBegin(self, isBinary: bool) -> None:
         self._began = time.perf_counter()
-        if trace.enabled:
-            trace.read_at = time.time()
         super().onMessageBegin(isBinary)
 
     def on_message(self, payload: bytes) -> None:

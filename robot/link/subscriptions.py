@@ -14,7 +14,6 @@ import roslibpy
 
 from robot import interface as ri
 from robot.link.status import ROSBRIDGE_NODE, Upkeep
-from robot.live import trace
 from robot.live.announce import aannounce
 from robot.live.groups import TopicUpdate
 
@@ -109,8 +108,6 @@ class Subscriptions(Upkeep):
             if asyncio.iscoroutine(result):
                 self._spawn(result)
             return
-        if trace.enabled:
-            trace.begin(topic.key, t, msg)
         update: TopicUpdate = {
             "type": "robot.update", "key": topic.key, "topic": name, "msg_type": msg_type, "msg": msg, "t": t,
         }
@@ -119,6 +116,4 @@ class Subscriptions(Upkeep):
 
     async def _send_update(self, update: TopicUpdate) -> None:
         key = update["key"]
-        if trace.enabled:
-            trace.mark(update["t"], "drain")
         await aannounce(key, dict(update), recent=ri.topic(key).recent, store=self.store)

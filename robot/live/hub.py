@@ -33,7 +33,6 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any, Protocol
 
-from robot.live import trace
 from robot.live.frames import batch_frame, status_text, ws_text_frame
 
 log = logging.getLogger(__name__)
@@ -60,7 +59,7 @@ class FrameWriter(Protocol):
 # pass what it read through the link (read, the link's coalescer task, the hub). The robot
 # publishes pose and odometry together as two rosbridge frames a few tens of microseconds apart;
 # flushed on the pose alone, the odometry would wait for the writes to every socket, and take a
-# second frame (bench/live_fanout.py, LIVE_TRACE_FILE). Fed from Redis (scaled),
+# second frame (bench/live_fanout.py). Fed from Redis (scaled),
 # updates the link published together arrive as separate messages a Redis round trip or two
 # apart: that hub waits REDIS_GATHER_S so they still share a frame.
 TICK_S = 0.02
@@ -126,7 +125,6 @@ class Hub:
         self._tokens_at = time.monotonic()
         self._flushing: asyncio.Task | None = None
         self._thread = threading.get_ident()
-        self._traced: list[float] = []  # receive times of traced updates not yet written (robot.live.trace)
         self._link_status = status_text(None)
         self.services_down: dict[str, str] = {}
 
@@ -175,9 +173,6 @@ class Hub:
         watchers = self._watchers.get(key)
         if not watchers:
             return
-        if trace.enabled and key == trace.KEY:
-            trace.mark(t, "hub")
-            self._traced.append(t)
         for socket in watchers:
             socket.offer(key, fragment, t, every)
         self._dirty.update(watchers)
@@ -248,11 +243,6 @@ class Hub:
         if self._flushing is not None and not self._flushing.done():
             return  # the previous writes are still running; they schedule the next flush as they end
         self._refill(time.monotonic())
-        traced = self._traced
-        if traced:
-            self._traced = []
-            for t in traced:
-                trace.mark(t, "flush")
         dirty = self._dirty
         later: list[Socket] = []
         via_send: list[Socket] = []
@@ -279,8 +269,6 @@ class Hub:
                 writer.write(frame)
             written += 1
         dirty.clear()
-        for t in traced:
-            trace.finish(t, written)
         if written or via_send:
             self._tokens -= 1.0  # polling slow sockets alone costs no frame
         if later:
