@@ -14,7 +14,7 @@ STAMP := $(VENV)/.installed
 # suite starts (Daphne, links, the simulator, manage.py) compiles all it imports again, ~5 CPU s each.
 unexport PYTHONDONTWRITEBYTECODE
 
-.PHONY: run test test-repeat install browser nginx wrk stack stack-down lint bench clean
+.PHONY: run test test-quick test-repeat install browser nginx wrk stack stack-down lint bench clean
 
 # Installs exactly what requirements/dev.lock pins, with hashes. Upgrading is on purpose:
 #   .venv/bin/uv pip compile pyproject.toml --extra dev --generate-hashes --python-version 3.12 \
@@ -63,6 +63,12 @@ run: install
 
 test: install browser nginx
 	bash scripts/test.sh
+
+# While working: the tests a change touched (pytest-testmon: it remembers which code each test ran, in
+# .testmondata; the first run, with none yet, runs them all). Embedded wiring, neither the browser nor
+# the topology tests; make test stays the whole suite.
+test-quick: install
+	env -u REDIS_URL -u DATABASE_URL $(BIN)/python -m pytest --testmon -m "not browser and not stack" -n 2 -q $(ARGS)
 
 # The suite N times (make test-repeat N=5): which tests ever failed, and how often.
 N ?= 5
