@@ -13,13 +13,12 @@ from __future__ import annotations
 import asyncio
 import hashlib
 import json
-import time
 from functools import lru_cache
 from typing import Any
 
 from django.conf import settings
 
-from robot.uplink.limits import Bucket
+from cyborg_site.bucket import Bucket
 
 EXEMPT_PREFIXES = ("/static/", "/healthz")
 KEPT_CALLERS = 10_000
@@ -42,7 +41,7 @@ class ReadThrottle:
         self.app = app
         # A bucket per caller; past KEPT_CALLERS the least recently seen is forgotten.
         self._bucket = lru_cache(maxsize=KEPT_CALLERS)(
-            lambda key: Bucket(settings.READ_THROTTLE_BURST, time.monotonic()))
+            lambda key: Bucket(settings.READ_THROTTLE_PER_S, settings.READ_THROTTLE_BURST))
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         rate = settings.READ_THROTTLE_PER_S
@@ -50,7 +49,7 @@ class ReadThrottle:
                 or scope["path"].startswith(EXEMPT_PREFIXES)):
             return await self.app(scope, receive, send)
         bucket = self._bucket(caller(scope))
-        wait = bucket.wait_for_token(rate, settings.READ_THROTTLE_BURST, time.monotonic())
+        wait = bucket.take()
         if wait > settings.READ_THROTTLE_WAIT_S:
             bucket.tokens += 1  # not served: the token goes back
             await asyncio.sleep(settings.READ_THROTTLE_WAIT_S)

@@ -15,6 +15,8 @@ from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from cyborg_site.bucket import Bucket
+
 log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
@@ -34,7 +36,7 @@ class Coalescer:
         self._loop = loop
         self._max_backlog = max_backlog
         self._outbox: OrderedDict[Any, Any] = OrderedDict()
-        self._buckets: dict[str, tuple[float, float]] = {}  # key -> (tokens, when counted)
+        self._buckets: dict[str, Bucket] = {}
         self._last_arrival: dict[str, float] = {}
         self._waiting: dict[str, Any] = {}  # key -> latest value held back by the rate limit
         self._timers: dict[str, asyncio.TimerHandle] = {}
@@ -63,11 +65,10 @@ class Coalescer:
             self._timers[key] = self._loop.call_later((1.0 - tokens) * gap, self._on_timer, key, gap)
 
     def _tokens(self, key: str, gap: float) -> float:
-        now = time.monotonic()
-        tokens, at = self._buckets.get(key, (BURST, now))
-        tokens = min(BURST, tokens + (now - at) / gap)
-        self._buckets[key] = (tokens, now)
-        return tokens
+        bucket = self._buckets.get(key)
+        if bucket is None:
+            bucket = self._buckets[key] = Bucket(1.0 / gap, BURST)
+        return bucket.level()
 
     def _on_timer(self, key: str, gap: float) -> None:
         self._timers.pop(key, None)
@@ -77,8 +78,8 @@ class Coalescer:
             self._release(key, value)
 
     def _release(self, key: str, value: Any) -> None:
-        tokens, at = self._buckets[key]
-        self._buckets[key] = (max(0.0, tokens - 1.0), at)
+        bucket = self._buckets[key]
+        bucket.tokens = max(0.0, bucket.tokens - 1.0)  # one released on its period owes nothing
         self._enqueue(key, value)
 
     def _enqueue(self, slot: Any, value: Any) -> None:

@@ -33,6 +33,7 @@ import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any, Protocol
 
+from cyborg_site.bucket import Bucket
 from robot.live.frames import batch_frame, status_text, ws_text_frame
 
 log = logging.getLogger(__name__)
@@ -121,8 +122,7 @@ class Hub:
         self._watchers: dict[str, set[Socket]] = {}
         self._dirty: set[Socket] = set()
         self._flush_at: float | None = None
-        self._tokens = BURST
-        self._tokens_at = time.monotonic()
+        self._pace = Bucket(1.0 / tick_s, BURST)
         self._flushing: asyncio.Task | None = None
         self._thread = threading.get_ident()
         self._link_status = status_text(None)
@@ -216,16 +216,11 @@ class Hub:
 
     # --- writing ---------------------------------------------------------------------
 
-    def _refill(self, now: float) -> None:
-        self._tokens = min(BURST, self._tokens + (now - self._tokens_at) / self.tick_s)
-        self._tokens_at = now
-
     def _schedule(self, at_least: float | None = None) -> None:
         if self._flush_at is not None:
             return
         now = time.monotonic()
-        self._refill(now)
-        wait = max(self.gather_s if at_least is None else at_least, (1.0 - self._tokens) * self.tick_s)
+        wait = max(self.gather_s if at_least is None else at_least, self._pace.wait(now))
         self._flush_at = now + wait
         if wait > 0:
             self.loop.call_at(self.loop.time() + wait, self._flush)
@@ -242,7 +237,6 @@ class Hub:
         self._flush_at = None
         if self._flushing is not None and not self._flushing.done():
             return  # the previous writes are still running; they schedule the next flush as they end
-        self._refill(time.monotonic())
         dirty = self._dirty
         later: list[Socket] = []
         via_send: list[Socket] = []
@@ -270,7 +264,7 @@ class Hub:
             written += 1
         dirty.clear()
         if written or via_send:
-            self._tokens -= 1.0  # polling slow sockets alone costs no frame
+            self._pace.take()  # polling slow sockets alone costs no frame
         if later:
             dirty.update(later)
             self._schedule(at_least=0.0 if written or via_send else self.tick_s)  # stuck sockets: poll per tick

@@ -27,9 +27,10 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
+from cyborg_site.bucket import Bucket
 from cyborg_site.client_address import is_trusted_proxy
 from robot.uplink import credentials
-from robot.uplink.limits import Attempts, Bucket
+from robot.uplink.limits import Attempts
 from robot.uplink.relays import Relays
 from robot.uplink.status import clock
 from robot.uplink.tunnel import Tunnel
@@ -179,9 +180,9 @@ class UplinkEndpoint:
 
     async def _carry(self, live: Live) -> None:
         rate = self.max_messages_per_s  # with a second's worth of burst
-        bucket = Bucket(rate, time.monotonic())
+        bucket = Bucket(rate, rate)
         async for message in live.connection:
-            if bucket.wait_for_token(rate, rate, time.monotonic()):
+            if bucket.take():
                 await self._close(live, TOO_FAST, f"over {self.max_messages_per_s} messages a second")
                 return
             if isinstance(message, str):

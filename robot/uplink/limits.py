@@ -1,26 +1,8 @@
-"""Limits that are not a library's own: a token bucket (the uplink endpoint's message rate, the web
-process's read throttle, ``server.read_throttle``) and refused attempts per address."""
+"""Refused attempts per address (the token bucket is ``cyborg_site.bucket``)."""
 
 from __future__ import annotations
 
 import time
-
-
-class Bucket:
-    """A token bucket: ``rate`` tokens a second, at most ``burst`` kept."""
-
-    __slots__ = ("at", "tokens")
-
-    def __init__(self, burst: float, now: float) -> None:
-        self.tokens = burst
-        self.at = now
-
-    def wait_for_token(self, rate: float, burst: float, now: float) -> float:
-        """Take a token; the seconds until it is really there (0 when there was one)."""
-        self.tokens = min(burst, self.tokens + (now - self.at) * rate)
-        self.at = now
-        self.tokens -= 1
-        return 0.0 if self.tokens >= 0 else -self.tokens / rate
 
 
 class Attempts:
