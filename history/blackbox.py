@@ -26,13 +26,15 @@ from typing import Any
 
 from django.conf import settings
 
-from history import camerarec, recorder
+from history.camerarec import CameraRecorder
 from history.capture import Capture
 from history.incidents import Triggers, incident_open, incidents_to_capture
 from history.models import Incident
+from history.recorder import Recorder
 from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
 from robot import interface as ri
 from robot.live.keys import LATCH_KEY
+from robot.supervisor import holding, running
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +71,7 @@ class BlackBox(Capture[Pending]):
         entry[2] = True
         t, (name, msg_type, msg), _ = entry
         # The topics recorded every N seconds are those an incident keeps every message of.
-        if recorder.current is not None and name in recorder.current.periodic:
+        if (recording := running(Recorder)) is not None and name in recording.periodic:
             self._pending.append((name, msg_type, msg, t))
 
     def adopt(self, incident: Incident) -> None:
@@ -78,8 +80,8 @@ class BlackBox(Capture[Pending]):
         self.windows[incident.pk] = (incident.start, incident.end)
         for entry in self._unkept(incident.start, incident.end):
             self._keep(entry)
-        if camerarec.current is not None:
-            camerarec.current.hold(incident.pk, incident.start, incident.end)
+        if (camera := running(CameraRecorder)) is not None:
+            camera.hold(incident.pk, incident.start, incident.end)
 
     # --- the loop ---------------------------------------------------------------------
 
@@ -105,8 +107,8 @@ class BlackBox(Capture[Pending]):
             self.adopt(incident)
         past = time.time() - settings.HISTORY_FLUSH_S
         self.release_past(past)
-        if camerarec.current is not None:
-            camerarec.current.release_past(past)
+        if (camera := running(CameraRecorder)) is not None:
+            camera.release_past(past)
 
     def _batch(self, pending: list[Pending]) -> list[Row]:
         return encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)[0]
@@ -139,15 +141,7 @@ class BlackBox(Capture[Pending]):
             await self.flush()
 
 
-current: BlackBox | None = None
-
-
 async def run_blackbox(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
-    global current
-    current = box = BlackBox()
-    try:
+    with holding(BlackBox()) as box:
         await box.run(link)
-    finally:
-        if current is box:
-            current = None

@@ -25,6 +25,7 @@ from django.conf import settings
 from history.capture import Capture
 from history.frames import Frame, write_frames
 from history.storage import FailureLog
+from robot.supervisor import holding
 
 log = logging.getLogger(__name__)
 
@@ -108,18 +109,10 @@ class CameraRecorder(Capture[Frame]):
                         self.offer(time.time(), bytes(jpeg))
 
 
-# The camera recorder running in this process, if any (the black box holds its frames).
-current: CameraRecorder | None = None
-
-
 async def run_camera_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
-    global current
     camera = CameraRecorder(robot_connected=lambda: bool(link.connected))
     if camera.fps <= 0:
         await asyncio.Event().wait()  # recording is off: idle until cancelled
-    current = camera
-    try:
+    with holding(camera):
         await camera.run()
-    finally:
-        current = None

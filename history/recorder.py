@@ -25,6 +25,7 @@ from history.policies import Policy, load_policies
 from history.sampling import is_due, latest_key
 from history.sessions import SessionNotes
 from history.storage import FailureLog, Pending, Row, encode, write_rows
+from robot.supervisor import holding
 
 log = logging.getLogger(__name__)
 
@@ -247,14 +248,10 @@ def losses(watermark: dict[str, Any] | None) -> dict[str, int]:
     return {name: int(n) for name, n in ((watermark or {}).get("lost") or {}).items()}
 
 
-# The recorder running in this process, if any (tests and the status view read its counters).
-current: Recorder | None = None
-
-
 async def run_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
     from history.tasks import celery_writer_for
 
-    global current
-    current = Recorder(writer=celery_writer_for() if settings.HISTORY_BATCH_WRITER == "celery" else write_rows)
-    await current.run(link)
+    writer = celery_writer_for() if settings.HISTORY_BATCH_WRITER == "celery" else write_rows
+    with holding(Recorder(writer=writer)) as made:
+        await made.run(link)

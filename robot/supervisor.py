@@ -5,14 +5,17 @@ logged with its traceback and the task starts again after a backoff that doubles
 ceiling (and starts small again once a run lasted a while). A task that returns has finished
 its work; a cancelled one stops (``cancel_and_wait``: several, in bounded time). ``health()`` is
 what health reports: every supervised task of this process with its state, restarts and last error.
+``hold(part)`` lists a part this process runs (the hosted link, the recorders, the uplink endpoint)
+until ``release(part)``; ``running(kind)`` is how the others find it.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import time
-from collections.abc import Awaitable, Callable, Collection
+from collections.abc import Awaitable, Callable, Collection, Iterator
 from dataclasses import asdict, dataclass
 
 log = logging.getLogger(__name__)
@@ -110,3 +113,31 @@ def failing() -> list[str]:
 
 def forget(name: str) -> None:
     _tasks.pop(name, None)
+
+
+# The parts this process runs, newest last.
+_parts: list[object] = []
+
+
+def hold(part: object) -> None:
+    _parts.append(part)
+
+
+def release(part: object) -> None:
+    with contextlib.suppress(ValueError):
+        _parts.remove(part)
+
+
+@contextlib.contextmanager
+def holding[T](part: T) -> Iterator[T]:
+    """``part`` is running for the length of the block."""
+    hold(part)
+    try:
+        yield part
+    finally:
+        release(part)
+
+
+def running[T](kind: type[T]) -> T | None:
+    """The newest running part of ``kind``, if this process runs one."""
+    return next((part for part in reversed(_parts) if isinstance(part, kind)), None)

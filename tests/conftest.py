@@ -257,7 +257,7 @@ def sim():
 
 async def hosted_link(url: str, settings, *, timeout: float = 10):
     """The robot link hosted on the test's event loop, connected to ``url`` (no background services)."""
-    from robot.link import connection as link_module
+    from robot import supervisor
     from robot.link.hosting import start_link
 
     settings.ROSBRIDGE_URL = url
@@ -267,7 +267,7 @@ async def hosted_link(url: str, settings, *, timeout: float = 10):
     for task in tasks:
         task.cancel()
     await hosted.stop()
-    link_module.current = None
+    supervisor.release(hosted)
 
 
 @pytest.fixture
@@ -297,7 +297,7 @@ class LinkThread:
         return self.link
 
     def stop(self) -> None:
-        from robot.link import connection as link_module
+        from robot import supervisor
 
         async def _stop():
             for task in self.tasks:
@@ -305,7 +305,7 @@ class LinkThread:
             await self.link.stop()
 
         asyncio.run_coroutine_threadsafe(_stop(), self.loop).result(20)
-        link_module.current = None
+        supervisor.release(self.link)
         self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(5)
 

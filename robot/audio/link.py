@@ -29,6 +29,7 @@ from robot.link.connection import RobotLink, one_per_link
 from robot.link.serving import register_operation
 from robot.link.subscriptions import register_handler
 from robot.live.groups import MIC_GROUP, LinkReply, LinkRequest, SharedMessage
+from robot.supervisor import running
 
 log = logging.getLogger(__name__)
 
@@ -141,9 +142,7 @@ async def _declare(link: RobotLink, request: LinkRequest) -> LinkReply:
 
 
 async def _on_mic(link_topic: ri.Topic, msg: dict[str, Any], t: float) -> None:
-    from robot.link import connection
-
-    link = connection.current
+    link = running(RobotLink)
     if link is None:
         return
     listeners = listeners_of(link)

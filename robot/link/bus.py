@@ -20,13 +20,12 @@ from asgiref.sync import async_to_sync
 from django.conf import settings
 
 from robot import interface as ri
-from robot.link import connection as link_module
 from robot.link import direct
 from robot.link.connection import RobotLink
 from robot.live import queues
 from robot.live.groups import STATUS_KEY, LinkReply, LinkRequest
 from robot.live.state import get_store, redis_key, status_view
-from robot.supervisor import supervise
+from robot.supervisor import running, supervise
 
 
 class RobotError(Exception):
@@ -153,7 +152,7 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
     """Send one request to the link and wait for its reply; raise RobotError on failure."""
     timeout = timeout or settings.ROBOT_REQUEST_TIMEOUT_S
     request = _new_request(op, timeout, fields)
-    hosted = link_module.current
+    hosted = running(RobotLink)
     try:
         # asyncio.timeout, not wait_for: wait_for runs the request as a task of its own, a loop
         # turn later (a command would wait for it before anything is sent).

@@ -129,6 +129,3 @@ def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
     return of
 
 
-# The link hosted by this process, if any (embedded default, robotlink command, tests).
-current: RobotLink | None = None
-

@@ -16,7 +16,6 @@ from channels.layers import get_channel_layer
 from django.conf import settings
 
 from cyborg_site.drain import daphne_reactor
-from robot.link import connection as link_module
 from robot.link import direct
 from robot.link.bus import aping_over_queue
 from robot.link.connection import RobotLink
@@ -24,7 +23,7 @@ from robot.link.lease import Lease
 from robot.link.releases import LINK_HOOKS
 from robot.live import queues
 from robot.live.state import get_store
-from robot.supervisor import cancel_and_wait, supervise
+from robot.supervisor import cancel_and_wait, hold, release, running, supervise
 
 log = logging.getLogger(__name__)
 
@@ -61,7 +60,7 @@ async def start_link(
     except BaseException:
         await link.stop()  # what it had started (a rosbridge connection, its loops) goes with it
         raise
-    link_module.current = link
+    hold(link)
     tasks = [supervise("link.command-path", functools.partial(probe_command_path, link))]
     if not embedded and direct.enabled():
         tasks.append(supervise("link.direct", functools.partial(direct.serve, link.answer)))
@@ -82,8 +81,7 @@ async def stop_link(link: RobotLink, tasks: list[asyncio.Task], *, timeout: floa
     await link.stop()
     log.info("robot link stopped: background services in %.2f s, then the link in %.2f s",
              services_done - started, time.monotonic() - services_done)
-    if link_module.current is link:
-        link_module.current = None
+    release(link)
 
 
 async def probe_command_path(link: RobotLink) -> None:
@@ -116,7 +114,7 @@ def _stop_robot_before_exit(halt_drivers: Callable[[], Awaitable[int]]) -> objec
                 log.warning("shutting down: sent zero for %d driver(s)", stopped)
         except Exception:
             log.exception("shutting down: could not stop every driver")
-        if link_module.current is not None:
-            await link_module.current.stop()  # the link's own zero if the robot may be moving
+        if (link := running(RobotLink)) is not None:
+            await link.stop()  # the link's own zero if the robot may be moving
 
     return Deferred.fromFuture(asyncio.ensure_future(stop()))

@@ -7,7 +7,7 @@ import asyncio
 import logging
 import re
 import time
-from typing import Any, Protocol
+from typing import Any
 from urllib.parse import urlsplit
 
 from django.conf import settings
@@ -17,7 +17,7 @@ from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.groups import LATCH_KEY, LinkStatus
 from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S
-from robot.supervisor import failing
+from robot.supervisor import failing, running
 
 log = logging.getLogger(__name__)
 
@@ -30,21 +30,21 @@ ROSBRIDGE_NODE = "/rosbridge_websocket"
 _FAILED_SUBSCRIBE = re.compile(r"\[id: subscribe:(?P<topic>/[^\]]*?):\d+\] subscribe: (?P<error>.*)", re.S)
 
 
-class HostedUplink(Protocol):
-    def status(self) -> dict[str, Any]: ...
+class HostedUplink:
+    """The face of the uplink endpoint the link's status reads (robot.uplink.hosting holds it while it serves)."""
 
-
-# The uplink endpoint this process hosts, if any (robot.uplink.hosting sets it while it serves).
-uplink_endpoint: HostedUplink | None = None
+    def status(self) -> dict[str, Any]:
+        raise NotImplementedError
 
 
 def uplink_status() -> dict[str, Any] | None:
     """For the link's status: None when this server dials the robot itself."""
     if not settings.UPLINK:
         return None
-    if uplink_endpoint is None:
+    endpoint = running(HostedUplink)
+    if endpoint is None:
         return {"connected": False, "why": "the uplink endpoint is not running in the link's process"}
-    return uplink_endpoint.status()
+    return endpoint.status()
 
 
 class Upkeep(LinkCore):

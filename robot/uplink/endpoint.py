@@ -29,6 +29,7 @@ from websockets.http11 import Request, Response
 
 from cyborg_site.bucket import Bucket
 from cyborg_site.client_address import is_trusted_proxy
+from robot.link.status import HostedUplink
 from robot.uplink import credentials
 from robot.uplink.limits import Attempts
 from robot.uplink.relays import Relays
@@ -85,7 +86,7 @@ async def _audit(action: str, *, ok: bool, address: str, outcome: str, params: d
         log.exception("could not audit %s from %s", action, address)
 
 
-class UplinkEndpoint:
+class UplinkEndpoint(HostedUplink):
     def __init__(self, *, host: str, port: int, robot: str, relays: Relays, max_frame_bytes: int,
                  max_messages_per_s: int, auth_timeout_s: float, failure_limit: int) -> None:
         self.host, self.port, self.robot = host, port, robot

@@ -8,7 +8,7 @@ from typing import Any
 
 from django.conf import settings
 
-from robot.link import status
+from robot.supervisor import holding
 from robot.uplink.endpoint import UplinkEndpoint
 from robot.uplink.relays import Relays
 
@@ -27,12 +27,10 @@ async def serve_uplink(link: Any) -> None:
     """A background service of the link: the endpoint, until cancelled (the link's status names it)."""
     endpoint = make_endpoint()
     await endpoint.start()
-    status.uplink_endpoint = endpoint
     try:
-        while True:  # (a timer the loop holds: the embedded server keeps no reference to this task)
-            await asyncio.sleep(3600)
+        with holding(endpoint):
+            while True:  # (a timer the loop holds: the embedded server keeps no reference to this task)
+                await asyncio.sleep(3600)
     finally:
-        if status.uplink_endpoint is endpoint:
-            status.uplink_endpoint = None
         await asyncio.shield(endpoint.stop())
 

@@ -49,15 +49,15 @@ async def recording(fast_history, link):
     """The link with history's two background services running, as ``start_link`` runs them embedded."""
     import asyncio
 
-    from history import recorder
-    from history.recorder import run_recorder
+    from history.recorder import Recorder, run_recorder
     from history.sampling import run_schedule
+    from robot.supervisor import running
 
-    recorder.current = None
     tasks = [asyncio.ensure_future(run_recorder(link)), asyncio.ensure_future(run_schedule(link))]
     await asyncio.sleep(0)
-    assert recorder.current is not None
-    yield recorder.current
+    made = running(Recorder)
+    assert made is not None
+    yield made
     for task in tasks:
         task.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)

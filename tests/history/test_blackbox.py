@@ -11,6 +11,8 @@ import pytest
 from asgiref.sync import sync_to_async
 
 from history import blackbox, camerarec
+from history.blackbox import BlackBox
+from history.camerarec import CameraRecorder
 from history.frames import frame_at, frame_file, prune_frames, write_frames
 from history.incidents import Triggers, incident_open, incident_release
 from history.models import CameraFrame, Incident, Mode, Sample, TopicPolicy
@@ -21,6 +23,7 @@ from robot import interface as ri
 from robot.live.announce import aannounce, server_update
 from robot.live.keys import LATCH_KEY
 from robot.live.latchstate import Latch
+from robot.supervisor import running
 from tests.helpers import async_wait_until
 
 JPEG = b"\xff\xd8\xff\xe0fake-jpeg\xff\xd9"
@@ -48,8 +51,8 @@ async def black_box(recording, sim, link, settings, camera_dir):
     await _record_hourly("robot_pose")
     tasks = [asyncio.ensure_future(camerarec.run_camera_recorder(link)),
              asyncio.ensure_future(blackbox.run_blackbox(link))]
-    await async_wait_until(lambda: camerarec.current is not None and blackbox.current is not None, timeout=5)
-    yield blackbox.current
+    await async_wait_until(lambda: running(CameraRecorder) is not None and running(BlackBox) is not None, timeout=5)
+    yield running(BlackBox)
     for task in tasks:
         task.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)
@@ -117,7 +120,7 @@ def test_frames_are_files_indexed_by_time(db, camera_dir):
 
 @pytest.mark.django_db(transaction=True)
 async def test_an_estop_keeps_the_seconds_before_it_at_full_rate_camera_included(black_box, link, settings):
-    camera = camerarec.current
+    camera = running(CameraRecorder)
     pose = ri.topic("robot_pose").name
     await async_wait_until(lambda: camera.received >= 30, timeout=15, what="4 s of camera frames")
     # What the camera sent in the seconds the incident reaches back over (fewer on a busy machine).
@@ -166,7 +169,7 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
     odom = ri.topic("odom").name
     await _record_hourly("odom")
     first = asyncio.ensure_future(blackbox.run_blackbox(link))
-    await async_wait_until(lambda: blackbox.current is not None and blackbox.current.received > 30, timeout=10,
+    await async_wait_until(lambda: (box := running(BlackBox)) is not None and box.received > 30, timeout=10,
                            what="the black box hearing the robot")
     await asyncio.sleep(settings.INCIDENT_BEFORE_S + 0.5)  # its ring holds the seconds before the mark
     # A web process marks the moment: only the database tells the black box.

@@ -7,7 +7,7 @@ import threading
 import pytest
 
 from robot import interface as ri
-from robot.link import connection as link_module
+from robot import supervisor
 from robot.link import subscriptions
 from robot.link.bus import RobotOffline, apublish, arequest
 from robot.live.state import link_status
@@ -91,12 +91,12 @@ async def test_it_shows_offline_and_resubscribes_when_the_robot_returns(link, si
 
 async def test_it_relays_requests_over_the_channel_layer(link, sim):
     # As a web process does when the link runs elsewhere (REDIS_URL): no hosted link here.
-    link_module.current = None
+    supervisor.release(link)
     try:
         await arequest("publish", topic=ri.topic("register_event").name, msg_type="std_msgs/String",
                        msg={"data": "aborted"})
     finally:
-        link_module.current = link
+        supervisor.hold(link)
     await async_wait_until(lambda: sim.robot.received_count(ri.topic("register_event").name) == 1, timeout=5)
 
 

@@ -5,7 +5,7 @@ import asyncio
 import pytest
 
 from robot import interface as ri
-from robot.link import connection as link_module
+from robot import supervisor
 from robot.link import watching
 from robot.link.topicwatch import LocalWatches, TopicRefused
 from robot.link.watching import echo_key, watches_of
@@ -81,7 +81,7 @@ async def test_a_dead_web_process_lease_runs_out(link, sim, settings, monkeypatc
 
 async def test_watches_from_several_web_processes_are_counted_at_the_link(link, sim, settings):
     settings.TOPICS_IDLE_GRACE_S = 0
-    link_module.current = None  # requests travel over the channel layer, as from another process
+    supervisor.release(link)  # requests travel over the channel layer, as from another process
     try:
         first, second = LocalWatches(), LocalWatches()
         await first.watch("page-a", TF)
@@ -96,7 +96,7 @@ async def test_watches_from_several_web_processes_are_counted_at_the_link(link, 
         await second.drop("page-c")
         await async_wait_until(lambda: sim.subscription_count(TF) == 0, timeout=10, what="unsubscribed")
     finally:
-        link_module.current = link
+        supervisor.hold(link)
 
 
 async def test_unknown_topics_and_bad_names_get_a_clear_error_and_never_reach_the_robot(link, sim, viewer):

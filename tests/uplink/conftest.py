@@ -9,7 +9,7 @@ from tests.uplink.support import Agent, make_credential
 @pytest.fixture
 async def endpoint(settings, transactional_db):
     """The uplink endpoint and its relays on the test's event loop, on free ports."""
-    from robot.link import status
+    from robot import supervisor
     from robot.uplink import hosting
 
     settings.UPLINK = True
@@ -20,9 +20,8 @@ async def endpoint(settings, transactional_db):
     settings.VIDEO_URL = f"http://127.0.0.1:{settings.UPLINK_VIDEO_PORT}"
     made = hosting.make_endpoint()
     await made.start()
-    status.uplink_endpoint = made
-    yield made
-    status.uplink_endpoint = None
+    with supervisor.holding(made):
+        yield made
     await made.stop()
 
 

@@ -26,12 +26,12 @@ async def _link():
 
 
 async def _stop(link, tasks):
-    from robot.link import connection as link_module
+    from robot import supervisor
 
     for task in tasks:
         task.cancel()
     await link.stop()
-    link_module.current = None
+    supervisor.release(link)
 
 
 async def _actions(*names: str) -> list[AuditEntry]:
