@@ -29,8 +29,8 @@ from websockets.asyncio.client import ClientConnection, connect  # noqa: E402
 from bench.teleop_latency import login  # noqa: E402
 from robot import interface as ri  # noqa: E402
 from robot.audio.mic import decoder_for  # noqa: E402
-from simulator.audio import Microphone, tone  # noqa: E402
 from simulator.harness import SimThread  # noqa: E402
+from simulator.nodes.audiovisual import Microphone, tone  # noqa: E402
 from tests.stack import Stack  # noqa: E402
 
 TALK_S = 30.0

@@ -31,7 +31,7 @@ class SimThread:
     # --- lifecycle -------------------------------------------------------------------
 
     def start(self, timeout: float = 30.0) -> SimThread:
-        self._thread = threading.Thread(target=asyncio.run, args=(self._main(),), name=f"simrobot-{id(self):x}",
+        self._thread = threading.Thread(target=asyncio.run, args=(self._main(),), name=f"simulator-{id(self):x}",
                                         daemon=True)
         self._thread.start()
         if not self._ready.wait(timeout):

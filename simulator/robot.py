@@ -20,25 +20,22 @@ from typing import Any, TypeVar
 from robot import interface as ri
 
 from . import messages
-from .audio import Microphone, Speaker
 from .bus import Bus, Clock, SimNode
 from .camera import VideoServer
-from .emotions import EmotionSystem
-from .nodes.audiovisual import AudioVisualNode
+from .nodes.audiovisual import AudioVisualNode, Microphone, Speaker
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
 from .nodes.commander import CommanderNode
-from .nodes.controller import ControllerNode
+from .nodes.controller import ControllerNode, StateMachine
 from .nodes.costmaps import CostmapNode
 from .nodes.diagnostics import DiagnosticsNode
-from .nodes.emotion import EmotionNode
+from .nodes.emotion import EmotionNode, EmotionSystem
 from .nodes.graph import GraphNode
 from .nodes.laser import LaserNode
 from .nodes.localisation import LocalisationNode
 from .nodes.navigation import NavigationNode
 from .protocol import Broker
 from .server import RosbridgeServer
-from .statemachine import StateMachine
 from .world import Base, build
 
 log = logging.getLogger("simulator")

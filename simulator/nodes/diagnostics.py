@@ -15,9 +15,9 @@ from robot import interface as ri
 
 from .. import messages
 from ..bus import Bus, SimNode
-from ..laser import MOUNT as LASER_MOUNT
-from ..laser import Laser
 from .base import BaseNode
+from .laser import MOUNT as LASER_MOUNT
+from .laser import Laser
 
 HARDWARE_ID = "Pioneer LX (simulated)"
 LASER_ID = "SICK S300 (simulated)"

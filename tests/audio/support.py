@@ -8,7 +8,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from simulator.audio import tone
+from simulator.nodes.audiovisual import tone
 from tests.helpers import ws_communicator
 
 TALK = {"type": "talk", "on": True, "format": "S16LE", "rate": 16000, "channels": 1}

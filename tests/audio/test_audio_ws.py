@@ -10,7 +10,7 @@ import pytest
 
 from robot import interface as ri
 from robot.models import AuditEntry
-from simulator.audio import dominant_hz, tone
+from simulator.nodes.audiovisual import dominant_hz, tone
 from tests.audio.support import CHUNK, TALK, audio_socket, kind, talk_tone
 from tests.helpers import async_wait_until
 

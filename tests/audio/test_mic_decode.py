@@ -16,7 +16,7 @@ from robot.audio.mic import (
     layer3_frame_size,
     playback_format,
 )
-from simulator.audio import Microphone, dominant_hz, tone
+from simulator.nodes.audiovisual import Microphone, dominant_hz, tone
 
 MP3_INFO = {"channels": 1, "sample_rate": 16000, "sample_format": "S16LE", "bitrate": 32, "coding_format": "mp3"}
 

@@ -11,7 +11,7 @@ import pytest
 from robot import interface as ri
 from robot.audio.mic import MAX_UNFRAMED
 from robot.live.state import get_store
-from simulator.audio import dominant_hz
+from simulator.nodes.audiovisual import dominant_hz
 from tests.audio.support import audio_socket, kind
 from tests.helpers import async_wait_until
 

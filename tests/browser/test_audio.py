@@ -16,7 +16,7 @@ import roslibpy
 from playwright.sync_api import expect
 
 from robot import interface as ri
-from simulator.audio import dominant_hz
+from simulator.nodes.audiovisual import dominant_hz
 from tests.browser.support import CHROMIUM, CHROMIUM_ARGS, FULL_CHROMIUM, FULL_CHROMIUM_ARGS, fresh_page, login
 from tests.stack import Stack
 

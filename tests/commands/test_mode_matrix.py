@@ -14,8 +14,8 @@ import pytest
 
 from robot import interface as ri
 from robot.commands import modes
-from simulator import statemachine
 from simulator.harness import SimThread
+from simulator.nodes import controller
 from tests.commands.support import until_the_server_hears, wait_ready
 
 B, D, M, S = ri.Mode.BEHAVIOUR, ri.Mode.DEMO, ri.Mode.MANUAL, ri.Mode.STOP
@@ -103,7 +103,7 @@ async def test_it_names_the_step_that_failed(link, sim, settings, monkeypatch):
     await until_the_server_hears(lambda s: s == "suspension", "suspension")
     await change(sim, D, "suspension")
     # A robot whose demo state ignores `aborted` (a broken controller): the walk stops there, saying so.
-    monkeypatch.setitem(statemachine.TABLE, "demo", {})
+    monkeypatch.setitem(controller.TABLE, "demo", {})
     with pytest.raises(modes.ModeStepFailed) as failure:
         await modes.perform_mode(M)
     assert failure.value.message.startswith(

@@ -16,7 +16,7 @@ from history.models import Mode, Sample, TopicPolicy
 from history.policies import policies_add_discovered, policy_upsert
 from history.storage import write_rows
 from robot import interface as ri
-from simulator.audio import tone
+from simulator.nodes.audiovisual import tone
 from tests.helpers import async_wait_until
 
 from .test_api import _content

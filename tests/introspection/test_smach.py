@@ -8,7 +8,7 @@ import re
 import pytest
 
 from robot.introspection import smach
-from simulator.statemachine import StateMachine
+from simulator.nodes.controller import StateMachine
 
 
 def sim_containers() -> dict[str, smach.Container]:
@@ -123,7 +123,7 @@ def test_without_fresh_introspection_state_change_names_the_state():
 
 
 def test_every_state_of_the_simulator_offers_the_events_its_table_accepts():
-    from simulator.statemachine import TABLE
+    from simulator.nodes.controller import TABLE
 
     containers = sim_containers()
     for state, table in TABLE.items():

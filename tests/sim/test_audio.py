@@ -12,8 +12,8 @@ import pytest
 import roslibpy
 
 from robot import interface as ri
-from simulator.audio import Heard, Speaker, dominant_hz, tone
 from simulator.harness import SimThread
+from simulator.nodes.audiovisual import Heard, Speaker, dominant_hz, tone
 from tests.helpers import wait_until
 from tests.sim.support import FAST, Inbox
 

@@ -16,8 +16,9 @@ import pytest
 from websockets.sync.client import connect
 
 from robot import interface as ri
-from simulator import SimThread, messages, statemachine, world
+from simulator import SimThread, messages, world
 from simulator.bus import Clock
+from simulator.nodes import controller
 from tests.sim.support import Raw, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -45,7 +46,7 @@ DOC_BEHAVIOUR = {
 
 
 def _observable(state: str) -> str:
-    if state in statemachine.NAVIGATION_LEAVES:
+    if state in controller.NAVIGATION_LEAVES:
         return "navigation"
     return state
 
@@ -55,7 +56,7 @@ def test_it_implements_every_transition_of_the_documented_table(state):
     doc = DOC_TOP.get(state) or DOC_BEHAVIOUR[state]
     leaf = "navigation_go_to_schedular" if state == "navigation" else state
     for event, expected in doc.items():
-        machine = statemachine.StateMachine(lambda *a: None, initial=leaf)
+        machine = controller.StateMachine(lambda *a: None, initial=leaf)
         assert machine.fire(event), (state, event)
         reached = machine.state
         if expected == "behaviour":
@@ -64,12 +65,12 @@ def test_it_implements_every_transition_of_the_documented_table(state):
             assert reached == "suspension"
         else:
             assert _observable(reached) == expected, (state, event, reached)
-    machine = statemachine.StateMachine(lambda *a: None, initial=leaf)
+    machine = controller.StateMachine(lambda *a: None, initial=leaf)
     assert not machine.fire("no_such_event") and machine.state == leaf
 
 
 def test_it_lists_the_behaviour_states_in_the_interface_registry():
-    assert frozenset(ri.BEHAVIOUR_STATES) == statemachine.BEHAVIOUR_STATES
+    assert frozenset(ri.BEHAVIOUR_STATES) == controller.BEHAVIOUR_STATES
 
 
 def test_it_converts_messages_with_rosbridge_rules():

@@ -10,7 +10,7 @@ import pytest
 
 from robot import interface as ri
 from simulator.harness import SimThread
-from simulator.laser import Laser
+from simulator.nodes.laser import Laser
 from simulator.world import OCCUPIED, UNKNOWN, WorldMap, build
 from tests.sim.support import Raw, on_topic
 
