@@ -18,19 +18,39 @@ import math
 import time
 from datetime import datetime
 from functools import cached_property
-from typing import Any
+from typing import Any, Protocol
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 from PIL import Image, ImageDraw
 
-from .host import CameraHost
+from .world import Base, WorldMap
 
 log = logging.getLogger("simulator.camera")
 
 BOUNDARY = "boundarydonotcross"
 FPS = 8.0
 VIEW_M = (8.0, 6.0)  # metres of map shown around the robot
+
+
+class CameraHost(Protocol):
+    """What the camera needs of the simulator (``SimRobot``, which it must not import): what to draw,
+    and the introspection its HTTP routes serve."""
+
+    world: WorldMap
+    base: Base
+
+    def plan(self) -> list[tuple[float, float]]: ...
+
+    def caption(self) -> str: ...
+
+    def snapshot(self) -> dict[str, Any]: ...
+
+    def received_count(self, topic_name: str) -> int: ...
+
+    def received_with_times(self, topic_name: str, last: int | None = None) -> list[dict[str, Any]]: ...
+
+    def publish_external(self, topic: str, msg: dict[str, Any], count: int = 1) -> int: ...
 
 
 class Renderer:

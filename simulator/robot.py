@@ -5,7 +5,7 @@ It owns what the nodes share — the map, the base's body, the random source, th
 RosAria, amcl + map_server + move_base + cyborg_navigation, the emotion system, the audio
 and visual nodes, the controller (state machine, behaviours), the commander and rosbridge's
 rosapi. The websocket server and web_video_server look-alike (camera.py) see it only
-through the protocols in host.py. How to add a node: README.md.
+through the broker and camera.CameraHost. How to add a node: README.md.
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ class SimRobot:
         self.rng = random.Random(seed)
         self.world = build(map_name, seed)
         x, y, yaw = self.world.start
-        self.base = Base(self.world, x, y, yaw)  # the servers see base, world and broker (host.py)
+        self.base = Base(self.world, x, y, yaw)  # the servers see base, world and broker
         self.clock = Clock(time_scale)
         self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
         self.bus = Bus(self.broker, self.clock)
@@ -99,7 +99,7 @@ class SimRobot:
         self.add(DiagnosticsNode(self.base_node))
         self.bridge = self.add(BridgeNode(self.rng))
         self.add(GraphNode(lambda: self.nodes))
-        self.server = RosbridgeServer(self)  # both listen from start()
+        self.server = RosbridgeServer(self.broker, self.bridge.publish_client_count)  # both listen from start()
         self.video = VideoServer(self)
 
     # --- lifecycle -------------------------------------------------------------------
@@ -156,10 +156,7 @@ class SimRobot:
             except Exception:
                 log.exception("simulator tick failed")
 
-    # --- what the servers see (host.BridgeHost, host.CameraHost) ------------------------
-
-    def client_connected(self) -> None:
-        self.bridge.publish_client_count()
+    # --- what the servers see (camera.CameraHost) -----------------------------------------
 
     def plan(self) -> list[tuple[float, float]]:
         return self.nav_node.navigator.remaining()

@@ -5,19 +5,20 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections.abc import Callable
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
-from .host import BridgeHost
-from .protocol import Client
+from .protocol import Broker, Client
 
 log = logging.getLogger("simulator.server")
 
 
 class RosbridgeServer:
-    def __init__(self, robot: BridgeHost) -> None:
-        self.robot = robot
+    def __init__(self, broker: Broker, clients_changed: Callable[[], None]) -> None:
+        self.broker = broker
+        self.clients_changed = clients_changed
         self.server: Server | None = None
         self.port = 0
         self.connections: set[ServerConnection] = set()
@@ -43,11 +44,11 @@ class RosbridgeServer:
 
     async def _handle(self, ws: ServerConnection) -> None:
         self.connections.add(ws)
-        broker = self.robot.broker
+        broker = self.broker
         address = ws.remote_address[0] if ws.remote_address else ""
         client = Client(broker, ws.send, address)
         broker.clients[client.id] = client
-        self.robot.client_connected()
+        self.clients_changed()
         writer = asyncio.get_running_loop().create_task(self._write(client))
         try:
             async for raw in ws:
@@ -59,7 +60,7 @@ class RosbridgeServer:
             writer.cancel()
             self.connections.discard(ws)
             broker.disconnect(client)
-            self.robot.client_connected()
+            self.clients_changed()
 
     @staticmethod
     async def _write(client: Client) -> None:
