@@ -10,7 +10,6 @@ waited for: the pages reconnect through another web process.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import signal
 import sys
@@ -23,7 +22,6 @@ DRAIN_S = 5.0  # well inside systemd's TimeoutStopSec (deploy/systemd) and stack
 
 _in_flight = 0
 _draining = False
-_stopping: asyncio.Future | None = None
 
 
 class CountRequests:
@@ -69,7 +67,7 @@ def install_in_daphne() -> None:
 
 
 def _drain(reactor: Any) -> None:
-    global _draining, _stopping
+    global _draining
     from twisted.internet import tcp
 
     if _draining:
@@ -80,13 +78,13 @@ def _drain(reactor: Any) -> None:
         if isinstance(reader, tcp.Port):  # the listening sockets (unix ones are Ports too)
             reader.stopListening()
     log.warning("stopping: no longer listening; finishing %d request(s) in flight", _in_flight)
-    _stopping = asyncio.ensure_future(_stop_when_idle(reactor))
+    _stop_when_idle(reactor, time.monotonic() + DRAIN_S)
 
 
-async def _stop_when_idle(reactor: Any) -> None:
-    deadline = time.monotonic() + DRAIN_S
-    while _in_flight and time.monotonic() < deadline:
-        await asyncio.sleep(0.02)
+def _stop_when_idle(reactor: Any, deadline: float) -> None:
+    if _in_flight and time.monotonic() < deadline:
+        reactor.callLater(0.02, _stop_when_idle, reactor, deadline)
+        return
     if _in_flight:
         log.warning("stopping: %d request(s) still running after %g s are cancelled", _in_flight, DRAIN_S)
     if reactor.running:

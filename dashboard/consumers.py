@@ -25,6 +25,7 @@ from robot.live.groups import STATUS_KEY
 from robot.live.hub import FRAMES_EXTENSION
 from robot.live.keys import SERVER_KEYS, upstream_topics, watchable_keys
 from robot.live.state import get_store
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -167,7 +168,7 @@ class LiveConsumer(NoDatabaseHopMixin, AsyncJsonWebsocketConsumer):
         if roles_cached(user) and is_operator(user):
             return
         if self._rechecking is None or self._rechecking.done():
-            self._rechecking = asyncio.ensure_future(self._recheck())
+            self._rechecking = spawn(self._recheck())
 
     async def _recheck(self) -> None:
         """While this person watches robot topics: every ``RECHECK_S``, end the watches of those an

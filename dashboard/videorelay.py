@@ -21,6 +21,8 @@ from typing import Any
 import aiohttp
 from django.conf import settings
 
+from robot.supervisor import spawn
+
 log = logging.getLogger(__name__)
 
 CONNECT_TIMEOUT_S = 3.0
@@ -82,7 +84,7 @@ class Upstream:
         self.viewers: set[Viewer] = set()
         self.opened: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self.frames = 0
-        self.task = asyncio.ensure_future(self._run())
+        self.task = spawn(self._run())
 
     async def _run(self) -> None:
         try:

@@ -67,14 +67,13 @@ class CameraRecorder(Capture[Frame]):
         return sorted(pending, key=lambda f: f[0])
 
     async def run(self) -> None:
-        pump = asyncio.ensure_future(self._pump_forever())
         try:
-            while True:
-                await asyncio.sleep(settings.HISTORY_FLUSH_S)
-                await self.flush()
+            async with asyncio.TaskGroup() as group:
+                group.create_task(self._pump_forever())
+                while True:
+                    await asyncio.sleep(settings.HISTORY_FLUSH_S)
+                    await self.flush()
         finally:
-            pump.cancel()
-            await asyncio.gather(pump, return_exceptions=True)
             await self.flush()  # a clean stop loses nothing it took
 
     async def _pump_forever(self) -> None:

@@ -25,6 +25,7 @@ from cyborg_site.text import scrub
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
 from robot.live.state import jsonable
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -86,7 +87,7 @@ async def in_thread[T](fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         finally:
             close_old_connections()
 
-    work = asyncio.ensure_future(asyncio.to_thread(call))
+    work = spawn(asyncio.to_thread(call), awaited=True)
     try:
         return await asyncio.shield(work)
     except asyncio.CancelledError:

@@ -1,5 +1,9 @@
 """One small supervisor for every long-running task of a process.
 
+Every task the product starts has an owner that holds it, logs its failure and cancels it:
+``Tasks`` (a link's, a socket's, a session's; ``spawn`` for the process's own) or, where the
+owner's lifetime is one block, an ``asyncio.TaskGroup``.
+
 ``supervise(name, factory)`` runs ``factory()`` in a task; when it raises, the exception is
 logged with its traceback and the task starts again after a backoff that doubles up to a
 ceiling (and starts small again once a run lasted a while). A task that returns has finished
@@ -15,8 +19,9 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Awaitable, Callable, Collection, Iterator
+from collections.abc import Awaitable, Callable, Collection, Coroutine, Iterator
 from dataclasses import asdict, dataclass
+from typing import Any
 
 log = logging.getLogger(__name__)
 
@@ -36,9 +41,55 @@ class TaskHealth:
 
 
 _tasks: dict[str, TaskHealth] = {}
-# The event loop holds its tasks only weakly: one that waits on something nobody else holds (a
-# service idling on an event of its own) would be collected mid-run, its caller having let go.
-_running: set[asyncio.Task] = set()
+
+
+class Tasks:
+    """The tasks of one owner. The event loop holds its tasks only weakly: one that waits on something
+    nobody else holds would be collected mid-run, its caller having let go; so they are held here until
+    they end. A failure nobody awaits is logged with its traceback."""
+
+    def __init__(self) -> None:
+        self._held: set[asyncio.Task[Any]] = set()
+
+    def start[T](self, work: Coroutine[Any, Any, T], *, awaited: bool = False,
+                 loop: asyncio.AbstractEventLoop | None = None) -> asyncio.Task[T]:
+        """Run ``work`` in a task; ``awaited``: the caller takes its result (and its failure)."""
+        task = asyncio.ensure_future(work, loop=loop)
+        self._held.add(task)
+        task.add_done_callback(self._held.discard)
+        if not awaited:
+            task.add_done_callback(_log_failure)
+        return task
+
+    def __len__(self) -> int:
+        return len(self._held)
+
+    async def wait(self, timeout: float) -> None:
+        """Let the tasks end by themselves, for at most ``timeout``."""
+        if self._held:
+            await asyncio.wait(set(self._held), timeout=timeout)
+
+    def cancel(self) -> None:
+        for task in self._held:
+            task.cancel()
+
+    async def close(self, timeout: float) -> None:
+        """Cancel every task and wait at most ``timeout`` for them to end."""
+        await cancel_and_wait(list(self._held), timeout)
+
+
+def _log_failure(task: asyncio.Task[Any]) -> None:
+    if not task.cancelled() and (exc := task.exception()) is not None:
+        log.error("background task %s failed", task.get_name(), exc_info=exc)
+
+
+_process = Tasks()  # the process's own: supervised services, work that outlives who started it
+
+
+def spawn[T](work: Coroutine[Any, Any, T], *, awaited: bool = False,
+             loop: asyncio.AbstractEventLoop | None = None) -> asyncio.Task[T]:
+    """A task of the process's own, held until it ends (``Tasks.start``)."""
+    return _process.start(work, awaited=awaited, loop=loop)
 
 
 def supervise(
@@ -83,10 +134,8 @@ def supervise(
             if transient and _tasks.get(name) is health:
                 del _tasks[name]
 
-    task = asyncio.ensure_future(run())
+    task = _process.start(run())
     task.set_name(name)  # named where a stop reports it still running
-    _running.add(task)
-    task.add_done_callback(_running.discard)
     return task
 
 

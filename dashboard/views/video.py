@@ -8,7 +8,6 @@ client goes away Django cancels it and the viewer leaves the relay.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import weakref
 from collections.abc import AsyncIterator
@@ -28,6 +27,7 @@ from dashboard.videorelay import (
     fetch_snapshot,
     get_relay,
 )
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -66,7 +66,7 @@ def _unavailable(reason: str, status: int = 503, text: str = "Camera unavailable
 
 async def _frames(relay: VideoRelay, viewer: Viewer, person: dict[str, Any]) -> AsyncIterator[bytes]:
     # The person's access changes (a logout, a deactivation, a new password): their streams end.
-    revoked = asyncio.ensure_future(end_when_revoked(person, operator=False, end=viewer.end))
+    revoked = spawn(end_when_revoked(person, operator=False, end=viewer.end))
     try:
         while (part := await viewer.next()) is not None:
             yield part

@@ -26,6 +26,7 @@ from robot.alerts import push
 from robot.alerts.book import Record
 from robot.alerts.models import AlertChoice, PushSubscription, Webhook
 from robot.link.hosting import register_background
+from robot.supervisor import Tasks
 
 if TYPE_CHECKING:
     from robot.link.connection import RobotLink
@@ -142,7 +143,7 @@ async def run_delivery(link: RobotLink) -> None:
     global _queue
     queue = _queue = asyncio.Queue(maxsize=MAX_QUEUED)
     gate = asyncio.Semaphore(PARALLEL)
-    sending: set[asyncio.Task] = set()
+    sending = Tasks()
     try:
         while True:
             record = await queue.get()
@@ -152,14 +153,11 @@ async def run_delivery(link: RobotLink) -> None:
                 log.exception("could not find who wants the alert %s", record.text)
                 continue
             for target in targets:
-                task = asyncio.ensure_future(deliver(target, record, gate))
-                sending.add(task)
-                task.add_done_callback(sending.discard)
+                sending.start(deliver(target, record, gate))
     finally:
         if _queue is queue:
             _queue = None
-        for task in sending:
-            task.cancel()
+        sending.cancel()
 
 
 def install() -> None:

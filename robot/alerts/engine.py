@@ -30,6 +30,7 @@ from robot.link.hosting import register_background
 from robot.link.serving import register_operation
 from robot.live.announce import aannounce, server_update
 from robot.live.groups import ALERTS_KEY, LinkReply, LinkRequest
+from robot.supervisor import spawn
 
 if TYPE_CHECKING:
     from robot.link.connection import RobotLink
@@ -149,7 +150,7 @@ class AlertEngine:
             for attempt in range(SAVE_ATTEMPTS):
                 try:
                     # Shielded: a stop lets the write under way finish (and waits for it) before the rest.
-                    self.saving = asyncio.ensure_future(sync_to_async(records.save)(record))
+                    self.saving = spawn(sync_to_async(records.save)(record), awaited=True)
                     await asyncio.shield(self.saving)
                     break
                 except Exception:
@@ -165,7 +166,7 @@ async def run_alerts(link: RobotLink) -> None:
     except Exception:
         log.exception("could not read the open alerts; starting with none")
     link.listeners.append(engine.listen)
-    keeper = asyncio.ensure_future(engine.keep())
+    keeper = spawn(engine.keep())
     try:
         while True:
             engine.tick(time.time())

@@ -21,6 +21,7 @@ from rest_framework.exceptions import AuthenticationFailed, ValidationError
 
 from cyborg_site.roles import role_of
 from robot.models import TokenExpiry
+from robot.supervisor import spawn
 
 # A valid token is trusted this long without asking the database again (per process): a deleted
 # token, an expired one or a deactivated or demoted user stops working within this time in every
@@ -103,7 +104,7 @@ class CachedTokenAuthentication(TokenAuthentication):
             return None
         renewing = _renewing.get(key)
         if renewing is None or renewing.get_loop() is not asyncio.get_running_loop():
-            renewing = _renewing[key] = asyncio.ensure_future(sync_to_async(cls._renew, thread_sensitive=False)(key))
+            renewing = _renewing[key] = spawn(sync_to_async(cls._renew, thread_sensitive=False)(key), awaited=True)
             renewing.add_done_callback(lambda _: _renewing.pop(key, None))
         return await asyncio.shield(renewing)
 

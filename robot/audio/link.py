@@ -29,7 +29,7 @@ from robot.link.connection import RobotLink, one_per_link
 from robot.link.serving import register_operation
 from robot.link.subscriptions import register_handler
 from robot.live.groups import MIC_GROUP, LinkReply, LinkRequest, SharedMessage
-from robot.supervisor import running
+from robot.supervisor import Tasks, running
 
 log = logging.getLogger(__name__)
 
@@ -52,7 +52,7 @@ class Listeners:
         self.info: dict[str, Any] | None = None
         self.decoder: PcmRelay | Mp3Decoder | None = None
         self.reported = 0.0
-        self._tasks: set[asyncio.Task[None]] = set()
+        self._tasks = Tasks()
         # Each chunk's handler is a task of its own: sends wait their turn so that none
         # overtakes another (a group send to Redis awaits several times).
         self.sending = asyncio.Lock()
@@ -62,9 +62,7 @@ class Listeners:
         if name == self.info_topic and dict(msg) != self.info:
             self.info, self.decoder = dict(msg), None
             if self.leases:  # pages already listening must play the new format
-                task = asyncio.ensure_future(self._announce_format())
-                self._tasks.add(task)
-                task.add_done_callback(self._tasks.discard)
+                self._tasks.start(self._announce_format())
 
     async def _announce_format(self) -> None:
         try:

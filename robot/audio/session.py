@@ -41,6 +41,7 @@ from robot.commands.pipeline import Busy, InvalidCommand, arun_command
 from robot.link.bus import RobotError, apublish, arequest
 from robot.live.locks import HeldLock, Holder
 from robot.live.state import get_store
+from robot.supervisor import Tasks
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +74,7 @@ class AudioSession:
         self.refreshed = 0.0
         self.pacer = Pacer()
         self.told_idle = False
-        self._tasks: list[asyncio.Task] = []
+        self._tasks = Tasks()
         self._renewing: asyncio.Task | None = None
 
     # --- lifecycle ---------------------------------------------------------------------
@@ -88,8 +89,7 @@ class AudioSession:
             await self._end_talk("disconnect")
         if self.listening_since is not None:
             await self._stop_listening("disconnect")
-        for task in self._tasks:
-            task.cancel()
+        self._tasks.cancel()
 
     # --- text messages -----------------------------------------------------------------
 
@@ -131,8 +131,7 @@ class AudioSession:
         await self.mic_group(True)
         await self.send_json({"type": "format", **fmt})
         await self.send_json({"type": "listening", "on": True})
-        self._renewing = asyncio.ensure_future(self._renew())
-        self._tasks.append(self._renewing)
+        self._renewing = self._tasks.start(self._renew())
 
     async def _renew(self) -> None:
         while True:
@@ -205,7 +204,7 @@ class AudioSession:
         self.told_idle = False
         await self.send_json({"type": "talking", "on": True, "reason": "start"})
         await announce_talker(self.me, "start")
-        self._tasks.append(asyncio.ensure_future(self._watch_quiet()))
+        self._tasks.start(self._watch_quiet())
 
     async def _watch_quiet(self) -> None:
         quiet = settings.AUDIO_TALK_QUIET_S

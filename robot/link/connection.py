@@ -94,12 +94,11 @@ class RobotLink(Serving):
             _, running = await asyncio.wait({self._serving}, timeout=queues.POP_TIMEOUT_S + 1)
             if running:
                 log.warning("robot link request loop did not stop in time")
-        if self._inflight:
-            await asyncio.wait(set(self._inflight), timeout=2)  # answer what it took while the robot is there
+        await self._inflight.wait(2)  # answer what it took while the robot is there
         if self._coalescer is not None:
             self._coalescer.close()  # ends its sender
             self._tasks.append(self._coalescer._task)
-        await cancel_and_wait([*self._tasks, *self._inflight], 2)
+        await asyncio.gather(cancel_and_wait(self._tasks, 2), self._inflight.close(2))
         self._tasks.clear()
         if self.guard is not None:
             self.guard.stop()  # zero before the connection goes, if the robot may be moving

@@ -14,6 +14,7 @@ from robot import interface as ri
 from robot.link.guard import CmdVelGuard
 from robot.live.fanout import Coalescer
 from robot.live.state import StateStore
+from robot.supervisor import Tasks
 
 if TYPE_CHECKING:
     from robot.link.lease import Lease
@@ -66,7 +67,7 @@ class LinkCore:
         self._coalescer: Coalescer | None = None
         self._stopped = False
         self._serving: asyncio.Future | None = None
-        self._inflight: set[asyncio.Future] = set()
+        self._inflight = Tasks()
         self._guard_settings = guard_settings or {"rate_hz": 10.0, "hold_s": 1.0, "deadman_s": 0.35}
         self.guard: CmdVelGuard | None = None
         self.request_queue = request_queue  # requests arrive on this queue (robot.live.queues)
@@ -84,9 +85,7 @@ class LinkCore:
         self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
     def _spawn(self, coro: Any) -> None:
-        task = asyncio.ensure_future(coro)
-        self._inflight.add(task)
-        task.add_done_callback(self._inflight.discard)
+        self._inflight.start(coro)
 
     def _threadsafe(self, fn: Callable[..., Any], *args: Any) -> None:
         loop = self.loop

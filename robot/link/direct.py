@@ -21,6 +21,7 @@ from django.conf import settings
 from django.core import signing
 
 from robot.live.groups import LinkReply, LinkRequest
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +95,7 @@ async def ask(request: LinkRequest, timeout: float) -> LinkReply:
     "offline"); else, ``ACTIVE_GRACE_S`` after a standby stopped the robot, the standby's; else the
     last refusal; ``Unreachable`` if no link listens."""
     line = signing.dumps(dict(request), salt=SALT, compress=True).encode() + b"\n"
-    pending = {asyncio.ensure_future(_one(host, port, line, timeout)) for host, port in addresses()}
+    pending = {spawn(_one(host, port, line, timeout), awaited=True) for host, port in addresses()}
     loop = asyncio.get_running_loop()
     standby: LinkReply | None = None
     refusal: LinkReply | None = None

@@ -22,6 +22,7 @@ from collections.abc import Callable
 from typing import Any
 
 from robot import interface as ri
+from robot.supervisor import Tasks
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +51,7 @@ class CmdVelGuard:
         self.release_first = False  # the connection dropped since the last zero: motion waits for one
         self._deadman: asyncio.TimerHandle | None = None
         self._hold: asyncio.Task | None = None
+        self._tasks = Tasks()
 
     def check_publish(self, name: str, msg: dict[str, Any], *, by_the_stop: bool = False,
                       fresh_press: bool = False) -> str | None:
@@ -80,7 +82,7 @@ class CmdVelGuard:
         self.changed_at = time.monotonic()
         self._zero()
         if self._hold is None or self._hold.done():
-            self._hold = self._loop.create_task(self._hold_zero())
+            self._hold = self._tasks.start(self._hold_zero(), loop=self._loop)
 
     def release(self) -> None:
         self.latched = False

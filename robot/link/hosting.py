@@ -23,7 +23,7 @@ from robot.link.lease import Lease
 from robot.link.releases import LINK_HOOKS
 from robot.live import queues
 from robot.live.state import get_store
-from robot.supervisor import cancel_and_wait, hold, release, running, supervise
+from robot.supervisor import cancel_and_wait, hold, release, running, spawn, supervise
 
 log = logging.getLogger(__name__)
 
@@ -101,7 +101,7 @@ def autostart_in_daphne(*, halt_drivers: Callable[[], Awaitable[int]]) -> None:
     reactor.addSystemEventTrigger("before", "shutdown", _stop_robot_before_exit, halt_drivers)
     if settings.EMBEDDED and settings.ROBOT_LINK_EMBEDDED:
         LINK_HOOKS.refuse_others()
-        reactor.callWhenRunning(lambda: asyncio.ensure_future(start_link(embedded=True)))
+        reactor.callWhenRunning(lambda: spawn(start_link(embedded=True)))
 
 
 def _stop_robot_before_exit(halt_drivers: Callable[[], Awaitable[int]]) -> object:
@@ -117,4 +117,4 @@ def _stop_robot_before_exit(halt_drivers: Callable[[], Awaitable[int]]) -> objec
         if (link := running(RobotLink)) is not None:
             await link.stop()  # the link's own zero if the robot may be moving
 
-    return Deferred.fromFuture(asyncio.ensure_future(stop()))
+    return Deferred.fromFuture(spawn(stop()))

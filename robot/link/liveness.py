@@ -19,6 +19,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.link.rosclient import call_service
+from robot.supervisor import spawn
 
 if TYPE_CHECKING:
     from robot.link.status import Upkeep
@@ -56,7 +57,7 @@ async def watch_liveness(link: Upkeep) -> None:
             now = time.time()
             if link.connected and (probe is None or probe.done()) and now - probed_at >= PROBE_EVERY_S:
                 probed_at = now
-                probe = asyncio.ensure_future(_probe(link))
+                probe = spawn(_probe(link))
             responding = judge(connected=link.connected, heard_at=link.heard_at, now=now, hang=hang_s())
             if responding != link.responding:
                 link.responding = responding

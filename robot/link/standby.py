@@ -23,6 +23,7 @@ from robot import interface as ri
 from robot.link import direct
 from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live.groups import LinkReply, LinkRequest
+from robot.supervisor import Tasks
 
 log = logging.getLogger(__name__)
 
@@ -31,7 +32,7 @@ class StandbyStop:
         self.url = url
         self.ros: roslibpy.Ros | None = None
         self._publishers: dict[str, roslibpy.Topic] = {}
-        self._holds: set[asyncio.Task] = set()
+        self._holds = Tasks()
 
     async def run(self) -> None:
         """Connect (and keep reconnecting) and answer on the direct path until cancelled."""
@@ -44,8 +45,7 @@ class StandbyStop:
         try:
             await direct.serve(self.answer)
         finally:
-            for hold in self._holds:
-                hold.cancel()
+            self._holds.cancel()
             ros, self.ros = self.ros, None
             ros.factory.stopTrying()
             if ros.is_connected:
@@ -64,9 +64,7 @@ class StandbyStop:
         cmd_vel = ri.topic("cmd_vel")
         if op == "estop":
             self._publish(cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
-            task = asyncio.ensure_future(self._hold_zero())
-            self._holds.add(task)
-            task.add_done_callback(self._holds.discard)
+            self._holds.start(self._hold_zero())
             return {"ok": True}
         name = request.get("topic") if op == "publish" else request.get("service")
         msg: dict[str, Any] = (request.get("msg") if op == "publish" else request.get("args")) or {}

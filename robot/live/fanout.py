@@ -16,6 +16,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from cyborg_site.bucket import Bucket
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ class Coalescer:
         self._seq = itertools.count()
         self._wake = asyncio.Event()
         self._closed = False
-        self._task = loop.create_task(self._drain())
+        self._task = spawn(self._drain(), loop=loop)
         self.dropped = 0
 
     def offer(self, key: str, rate_hz: float | None, value: Any) -> None:

@@ -23,6 +23,7 @@ from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
 from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
 from robot.live.state import get_store, redis_key
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -82,7 +83,7 @@ async def alocal_hub() -> Hub:
         task = _subscribers.get(hub)
         if task is None or task.done():
             _ready[hub] = asyncio.Event()
-            _subscribers[hub] = hub.loop.create_task(run_subscriber(hub))
+            _subscribers[hub] = spawn(run_subscriber(hub), loop=hub.loop)
         try:
             async with asyncio.timeout(SUBSCRIBE_WAIT_S):
                 await _ready[hub].wait()

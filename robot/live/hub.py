@@ -35,6 +35,7 @@ from typing import Any, Protocol
 
 from cyborg_site.bucket import Bucket
 from robot.live.frames import batch_frame, status_text, ws_text_frame
+from robot.supervisor import spawn
 
 log = logging.getLogger(__name__)
 
@@ -269,7 +270,7 @@ class Hub:
             dirty.update(later)
             self._schedule(at_least=0.0 if written or via_send else self.tick_s)  # stuck sockets: poll per tick
         if via_send:
-            self._flushing = self.loop.create_task(self._write(via_send))
+            self._flushing = spawn(self._write(via_send), loop=self.loop)
 
     async def _write(self, sockets: list[Socket]) -> None:
         for socket in sockets:

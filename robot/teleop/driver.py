@@ -25,6 +25,7 @@ from robot.commands.motors import MotorsOff, ensure_motors_on
 from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
 from robot.link.bus import EstopEngaged, RobotError
 from robot.live.locks import HeldLock, Holder
+from robot.supervisor import Tasks
 from robot.teleop.driving import LockEvent, announce, lock_acquire, lock_release, lock_takeover, teleop_record
 from robot.teleop.lock import get_lock
 from robot.teleop.session import NotHolding, TeleopSession
@@ -44,6 +45,7 @@ class Driver:
         self.holding = False
         self._refused: object = None  # who we last told this user is driving (audited once)
         self._expiry: asyncio.Task | None = None
+        self._tasks = Tasks()
 
     async def start(self) -> None:
         holder = await self.lock.holder()
@@ -188,7 +190,7 @@ class Driver:
     def _watch_expiry(self) -> None:
         """Tell every page when an idle driver's lock runs out (nobody else would notice)."""
         self._cancel_expiry()
-        self._expiry = asyncio.ensure_future(self._expire_later())
+        self._expiry = self._tasks.start(self._expire_later())
 
     def _cancel_expiry(self) -> None:
         if self._expiry is not None and self._expiry is not asyncio.current_task():

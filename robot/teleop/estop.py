@@ -18,6 +18,7 @@ from robot.commands.modes import perform_stop
 from robot.commands.pipeline import Command, InvalidCommand, arun
 from robot.link.bus import RobotError, acall_service, arequest, emergency
 from robot.navigation.goals import apublish_action, cancel_message
+from robot.supervisor import spawn
 from robot.teleop.driving import announce
 from robot.teleop.lock import get_lock
 
@@ -116,8 +117,6 @@ class _KeptSteps:
     """The steps as kept with the latch. A step that answers after the report is logged and kept in its
     place, so every page shows how it ended; one write at a time, so the newest is the one that stays."""
 
-    background: set[asyncio.Task] = set()
-
     def __init__(self, steps: list[dict[str, Any]], engaged: list[Latch]) -> None:
         self.steps = [dict(s) for s in steps]
         self.engaged = engaged
@@ -137,14 +136,7 @@ class _KeptSteps:
             if entry["step"] == result.step:
                 entry.update(ok=result.ok, detail=f"{result.detail} (after the answer)")
         if self.engaged:
-            keeping = asyncio.ensure_future(self.keep())
-            self.background.add(keeping)
-            keeping.add_done_callback(self._kept)
-
-    def _kept(self, task: asyncio.Task) -> None:
-        self.background.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            log.warning("could not keep a late e-stop step with the latch", exc_info=task.exception())
+            spawn(self.keep())
 
 
 async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
@@ -162,7 +154,7 @@ async def estop_steps(*, by: str = "") -> tuple[EstopReport, Latch]:
 
     steps: tuple[tuple[str, Step], ...] = (STEPS[0], ("latch", latch), *STEPS[1:])
     with emergency():  # the steps' requests pass the link's latch, by the direct path where there is one
-        tasks = [asyncio.ensure_future(_attempt(name, step, by)) for name, step in steps]
+        tasks = [spawn(_attempt(name, step, by), awaited=True) for name, step in steps]
     done, _ = await asyncio.wait(tasks, timeout=ANSWER_S)
     trying = f"no answer within {ANSWER_S:g} s (still trying)"
     results = [task.result() if task in done else StepResult(name, False, trying)

@@ -30,6 +30,7 @@ from websockets.http11 import Request, Response
 from cyborg_site.bucket import Bucket
 from cyborg_site.client_address import is_trusted_proxy
 from robot.link.status import HostedUplink
+from robot.supervisor import Tasks
 from robot.uplink import credentials
 from robot.uplink.limits import Attempts
 from robot.uplink.relays import Relays
@@ -73,7 +74,7 @@ class Live:
     since: float
     tunnel: Tunnel
     ending: str = ""  # why the server closes it, for the audit
-    tasks: list[asyncio.Task] = field(default_factory=list)
+    tasks: Tasks = field(default_factory=Tasks)
 
 
 async def _audit(action: str, *, ok: bool, address: str, outcome: str, params: dict[str, Any]) -> None:
@@ -166,7 +167,7 @@ class UplinkEndpoint(HostedUplink):
         log.info("robot %s connected through its uplink from %s", self.robot, address)
         await _audit("uplink.connect", ok=True, address=address, outcome="connected", params=params)
         await in_db(credentials.credential_note_use, accepted=accepted, address=address)
-        live.tasks.append(asyncio.ensure_future(self._watch_credential(live)))
+        live.tasks.start(self._watch_credential(live))
         try:
             await self._carry(live)
         except ConnectionClosed:
@@ -204,8 +205,7 @@ class UplinkEndpoint(HostedUplink):
         self.live = None
         self.last_end = {"last_address": live.address, "last_since": live.since, "ended": time.time(),
                          "why": live.ending or _close_text(live.connection)}
-        for task in live.tasks:
-            task.cancel()
+        live.tasks.cancel()
         live.tunnel.end()
         await self.relays.stop()
         code = TAKEN_OVER if live.ending.startswith("taken over") else 1000

@@ -18,6 +18,7 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
+from robot.supervisor import spawn
 from robot.uplink.tunnel import Channel, ChannelClosed, Tunnel
 from uplink_agent import mux
 
@@ -74,7 +75,7 @@ class Relays:
 
     async def _relay(self, connection: ServerConnection) -> None:
         channel = self._opened.pop(connection)
-        from_robot = asyncio.ensure_future(self._to_link(channel, connection))
+        from_robot = spawn(self._to_link(channel, connection))
         try:
             while True:
                 message = await connection.recv(decode=False)
@@ -87,12 +88,16 @@ class Relays:
             await connection.close()
 
     async def _to_link(self, channel: Channel, connection: ServerConnection) -> None:
-        while True:
-            kind, payload = await channel.next()
-            if kind != mux.DATA:
-                await connection.close(1011, payload.decode(errors="replace")[:100] or "the robot closed the session")
-                return
-            await connection.send(payload, text=True)
+        try:
+            while True:
+                kind, payload = await channel.next()
+                if kind != mux.DATA:
+                    why = payload.decode(errors="replace")[:100] or "the robot closed the session"
+                    await connection.close(1011, why)
+                    return
+                await connection.send(payload, text=True)
+        except (ConnectionClosed, ChannelClosed):
+            pass  # either side gone: _relay ends the session
 
     # --- video --------------------------------------------------------------------------
 

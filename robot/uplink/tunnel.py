@@ -9,6 +9,7 @@ from typing import Any
 
 from websockets.asyncio.server import ServerConnection
 
+from robot.supervisor import Tasks
 from uplink_agent import mux
 
 OPEN_TIMEOUT_S = 5.0
@@ -76,7 +77,7 @@ class Tunnel:
         self.channels: dict[int, Channel] = {}
         self._ids = itertools.count(1)
         self.ended = False
-        self._telling: set[asyncio.Task] = set()
+        self._telling = Tasks()
 
     async def open(self, request: dict[str, Any]) -> Channel:
         if self.ended:
@@ -97,9 +98,7 @@ class Tunnel:
     def forget(self, channel: Channel, reason: str) -> None:
         self.channels.pop(channel.cid, None)
         if not self.ended:
-            task = asyncio.ensure_future(self._tell_closed(channel.cid, reason))
-            self._telling.add(task)
-            task.add_done_callback(self._telling.discard)
+            self._telling.start(self._tell_closed(channel.cid, reason))
 
     async def _tell_closed(self, cid: int, reason: str) -> None:
         try:

@@ -111,7 +111,58 @@ async def test_a_task_that_waits_on_what_nobody_holds_is_not_collected_mid_run()
     await asyncio.sleep(0.05)
     assert not ended.is_set()
     assert supervisor.health()["test.idle"]["state"] == "running"
-    for task in list(supervisor._running):
+    for task in asyncio.all_tasks():
         if task.get_name() == "test.idle":
             task.cancel()
     await asyncio.wait_for(ended.wait(), 1)
+
+
+async def test_an_owners_task_that_fails_unawaited_is_logged_and_one_awaited_is_left_to_its_caller(caplog):
+    tasks = supervisor.Tasks()
+
+    async def fail(text: str) -> None:
+        raise ValueError(text)
+
+    with caplog.at_level(logging.ERROR, logger="robot.supervisor"):
+        unawaited = tasks.start(fail("nobody waits"))
+        awaited = tasks.start(fail("the caller waits"), awaited=True)
+        await asyncio.wait({unawaited, awaited})
+    assert str(awaited.exception()) == "the caller waits"
+    logged = [r.exc_info[1] for r in caplog.records if r.exc_info]
+    assert [str(exc) for exc in logged] == ["nobody waits"]
+    assert len(tasks) == 0  # let go once ended
+
+
+async def test_closing_an_owner_cancels_and_waits_for_its_tasks():
+    tasks = supervisor.Tasks()
+    ended = []
+
+    async def forever() -> None:
+        try:
+            await asyncio.sleep(3600)
+        finally:
+            ended.append(True)
+
+    for _ in range(3):
+        tasks.start(forever())
+    await asyncio.sleep(0)
+    await tasks.close(1)
+    assert ended == [True, True, True] and len(tasks) == 0
+
+
+def test_a_held_part_is_found_by_its_class_until_released():
+    class Part:
+        pass
+
+    class Other:
+        pass
+
+    first, second = Part(), Part()
+    assert supervisor.running(Part) is None
+    with supervisor.holding(first):
+        supervisor.hold(second)
+        assert supervisor.running(Part) is second  # the newest
+        assert supervisor.running(Other) is None
+        supervisor.release(second)
+        assert supervisor.running(Part) is first
+    assert supervisor.running(Part) is None

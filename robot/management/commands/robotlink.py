@@ -4,7 +4,7 @@ import logging
 import os
 import signal
 import socket
-from collections.abc import Awaitable
+from collections.abc import Coroutine
 from typing import Any
 
 from django.conf import settings
@@ -16,7 +16,7 @@ from robot.link.lease import Lease
 from robot.link.releases import LINK_HOOKS
 from robot.link.standby import StandbyStop
 from robot.live.state import redis_key
-from robot.supervisor import cancel_and_wait, supervise
+from robot.supervisor import cancel_and_wait, spawn, supervise
 
 LEASE_KEY = "link-lease"
 RETRY_AFTER_FAILURE_S = 1.0
@@ -83,7 +83,7 @@ class Command(BaseCommand):
             await _first(lease.hold(), stop.wait())
             if lease.held:
                 # A clean stop: still the holder (renewing) while the link zeroes the robot and flushes.
-                renewing = asyncio.ensure_future(lease.hold())
+                renewing = spawn(lease.hold())
             # Otherwise lost: the link publishes nothing more (fencing).
         finally:
             try:
@@ -116,10 +116,10 @@ def _exit_unless_done_within(seconds: float) -> None:
     faulthandler.dump_traceback_later(seconds, exit=True)
 
 
-async def _first(main: Awaitable[Any], stop: Awaitable[Any]) -> bool:
+async def _first(main: Coroutine[Any, Any, Any], stop: Coroutine[Any, Any, Any]) -> bool:
     """Run ``main`` until it returns or ``stop`` does; True if ``main`` finished first. A stop ends only
     such waits: cancelling the whole command could cut short a stop of the link already under way."""
-    main_task, stop_task = asyncio.ensure_future(main), asyncio.ensure_future(stop)
+    main_task, stop_task = spawn(main, awaited=True), spawn(stop)
     done, pending = await asyncio.wait({main_task, stop_task}, return_when=asyncio.FIRST_COMPLETED)
     await cancel_and_wait(pending, 2)
     if main_task in done:
