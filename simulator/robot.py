@@ -30,7 +30,6 @@ from .nodes.controller import ControllerNode, StateMachine
 from .nodes.costmaps import CostmapNode
 from .nodes.diagnostics import DiagnosticsNode
 from .nodes.emotion import EmotionNode, EmotionSystem
-from .nodes.graph import GraphNode
 from .nodes.laser import LaserNode
 from .nodes.localisation import LocalisationNode
 from .nodes.navigation import NavigationNode
@@ -97,8 +96,7 @@ class SimRobot:
         self.base_node.battery_low = self.controller.battery_low
         self.commander = self.add(CommanderNode(commander_pause_s))
         self.add(DiagnosticsNode(self.base_node))
-        self.bridge = self.add(BridgeNode(self.rng))
-        self.add(GraphNode(lambda: self.nodes))
+        self.bridge = self.add(BridgeNode(self.rng, lambda: self.nodes))
         self.server = RosbridgeServer(self.broker, self.bridge.publish_client_count)  # both listen from start()
         self.video = VideoServer(self)
 

@@ -1,16 +1,29 @@
-"""rosbridge's side of the graph: rosapi's services and parameters, connected clients, and /rosout chatter."""
+"""rosbridge's side of the graph: rosapi's services and parameters, connected clients, /rosout chatter,
+and rosapi's view of the graph (the nodes, who publishes and subscribes to what, each node's details).
+
+The graph is answered from what the simulator really does, so it agrees with ``/rosapi/topics`` and
+``/rosapi/nodes``: a topic's publishers are the node that declares it in ``publishes`` (or, for
+topics no node declares, such as action servers' and the costmaps', the node whose name is the
+topic's namespace), every node for ``/rosout``, and ``/rosbridge_websocket`` for what clients
+advertise and for rosbridge's own topics; rosbridge subscribes on behalf of its clients.
+"""
 
 from __future__ import annotations
 
 import json
 import random
+from collections.abc import Callable, Sequence
 from typing import Any
+
+from robot import interface as ri
 
 from .. import messages
 from ..bus import Bus, SimNode
 from ..protocol import ServiceError
 
-NODES = ("/rosapi", "/rosbridge_websocket", "/web_video_server", "/rosout")
+BRIDGE = "/rosbridge_websocket"
+
+NODES = ("/rosapi", BRIDGE, "/web_video_server", "/rosout")
 CHATTER = (
     ("/amcl", "Laser scan received, updating particle filter"),
     ("/move_base", "Got new plan"),
@@ -23,10 +36,12 @@ CHATTER = (
 class BridgeNode(SimNode):
     names = NODES
     publishes = ("client_count",)
-    answers = ("rosapi_topics", "rosapi_topic_type", "rosapi_services", "rosapi_get_time")
+    answers = ("rosapi_topics", "rosapi_topic_type", "rosapi_services", "rosapi_get_time", "rosapi_nodes",
+               "rosapi_publishers", "rosapi_subscribers", "rosapi_node_details")
 
-    def __init__(self, rng: random.Random) -> None:
+    def __init__(self, rng: random.Random, nodes: Callable[[], Sequence[SimNode]]) -> None:
         self.rng = rng
+        self.nodes = nodes
         self.params: dict[str, Any] = {"/rosdistro": "noetic", "/use_sim_time": False,
                                        "/robot_description": "Pioneer LX (simulated)"}
 
@@ -48,6 +63,10 @@ class BridgeNode(SimNode):
         bus.answer_name("/rosapi/has_param", "rosapi/HasParam", lambda r: {"exists": r["name"] in self.params})
         bus.answer_name("/rosapi/get_param_names", "rosapi/GetParamNames", lambda r: {"names": sorted(self.params)})
         bus.answer_name("/rosapi/message_details", "rosapi/MessageDetails", self._message_details)
+        bus.answer("rosapi_nodes", lambda r: {"nodes": self._graph_nodes()})
+        bus.answer("rosapi_publishers", lambda r: {"publishers": self.publishers(r["topic"])})
+        bus.answer("rosapi_subscribers", lambda r: {"subscribers": self.subscribers(r["topic"])})
+        bus.answer("rosapi_node_details", lambda r: self.node_details(r["node"]))
         bus.every(8.0, lambda: bus.rosout(2, *self.rng.choice(CHATTER)))
         self.publish_client_count()
 
@@ -62,3 +81,50 @@ class BridgeNode(SimNode):
         if not messages.known(r["type"]):
             raise ServiceError(f"Unable to load the manifest for message type {r['type']}")
         return {"typedefs": messages.typedefs(r["type"])}
+
+    # --- the graph -----------------------------------------------------------------------
+
+    def _graph_nodes(self) -> list[str]:
+        return [name for node in self.nodes() for name in node.names]
+
+    def _owner(self, topic: str) -> str | None:
+        """The node whose name is the longest namespace prefix of ``topic``."""
+        found = [n for n in self._graph_nodes() if topic.startswith(n + "/")]
+        return max(found, key=len) if found else None
+
+    def publishers(self, topic: str) -> list[str]:
+        broker = self.bus.broker
+        if topic not in broker.types:
+            return []
+        if topic == ri.topic("rosout").name:
+            return sorted(set(self._graph_nodes()))
+        if topic in (ri.topic("client_count").name, "/connected_clients"):
+            return [BRIDGE]
+        found: set[str] = set()
+        for node in self.nodes():
+            if any(ri.topic(key).name == topic for key in node.publishes):
+                found.add(self._owner(topic) or (node.names[0] if node.names else ""))
+        if broker.publishers.get(topic):
+            found.add(BRIDGE)
+        if not found and topic not in broker.handlers:
+            found.add(self._owner(topic) or "")
+        found.discard("")  # no node to name
+        return sorted(found)
+
+    def subscribers(self, topic: str) -> list[str]:
+        broker = self.bus.broker
+        found: set[str] = set()
+        if broker.subs.get(topic):
+            found.add(BRIDGE)
+        if broker.handlers.get(topic):
+            found.add(self._owner(topic) or "/cyborg_controller")
+        return sorted(found)
+
+    def node_details(self, node: str) -> dict[str, Any]:
+        broker = self.bus.broker
+        topics = sorted(broker.types)
+        return {
+            "publishing": [t for t in topics if node in self.publishers(t)],
+            "subscribing": [t for t in topics if node in self.subscribers(t)],
+            "services": sorted(s for s in broker.services if s.startswith(node + "/")),
+        }
