@@ -26,7 +26,7 @@ from robot.alerts import push
 from robot.alerts.book import Record
 from robot.alerts.models import AlertChoice, PushSubscription, Webhook
 from robot.link.hosting import register_background
-from robot.supervisor import Tasks
+from robot.supervisor import Tasks, holding, running
 
 if TYPE_CHECKING:
     from robot.link.connection import RobotLink
@@ -126,37 +126,36 @@ async def deliver(target: Target, record: Record, gate: asyncio.Semaphore, *, ba
     return False
 
 
-_queue: asyncio.Queue[Record] | None = None
+class Outbox(asyncio.Queue[Record]):
+    """The alerts waiting for delivery, while ``run_delivery`` runs in this process."""
 
 
 def offer(record: Record) -> None:
     """Queue a new alert for delivery (called where it was raised; never blocks)."""
-    if _queue is None:
+    outbox = running(Outbox)
+    if outbox is None:
         return
     try:
-        _queue.put_nowait(record)
+        outbox.put_nowait(record)
     except asyncio.QueueFull:
         log.error("alert delivery is %d behind: not sending %s", MAX_QUEUED, record.text)
 
 
 async def run_delivery(link: RobotLink) -> None:
-    global _queue
-    queue = _queue = asyncio.Queue(maxsize=MAX_QUEUED)
     gate = asyncio.Semaphore(PARALLEL)
     sending = Tasks()
     try:
-        while True:
-            record = await queue.get()
-            try:
-                targets = await sync_to_async(recipients)(record.kind, record.severity)
-            except Exception:
-                log.exception("could not find who wants the alert %s", record.text)
-                continue
-            for target in targets:
-                sending.start(deliver(target, record, gate))
+        with holding(Outbox(maxsize=MAX_QUEUED)) as outbox:
+            while True:
+                record = await outbox.get()
+                try:
+                    targets = await sync_to_async(recipients)(record.kind, record.severity)
+                except Exception:
+                    log.exception("could not find who wants the alert %s", record.text)
+                    continue
+                for target in targets:
+                    sending.start(deliver(target, record, gate))
     finally:
-        if _queue is queue:
-            _queue = None
         sending.cancel()
 
 
