@@ -12,6 +12,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 import pytest
 from channels.layers import channel_layers
 from django.conf import settings as django_settings
+from pytest_django.plugin import pytest_collection_modifyitems as django_order
 
 from cyborg_site.roles import Role
 from tests.browser.support import browser, page, sized_page, stack  # noqa: F401  (shared session fixtures)
@@ -89,11 +90,16 @@ asyncio.BaseEventLoop.shutdown_default_executor = _shutdown_default_executor_nam
 BROWSER_GROUPS = 2
 
 
+@pytest.hookimpl(hookwrapper=True)
 def pytest_collection_modifyitems(config, items):
-    """Browser tests last: Playwright's sync API leaves an event loop running in the main
+    """After every plugin's ordering (testmon's by duration comes last): pytest-django's order again,
+    plain database tests before transactional ones, whose flush empties the tables migrations seed.
+    Browser tests last: Playwright's sync API leaves an event loop running in the main
     thread, which async tests after it cannot share. Under xdist they run in two groups by file,
     each on one worker: a worker's first browser test starts a stack and a Chromium that run (and
     cost CPU) until the session ends, so spreading them over every worker costs more than it saves."""
+    yield
+    django_order(items)
     items.sort(key=lambda item: any(item.get_closest_marker(m) is not None for m in ("browser", "stack")))
     files = sorted({item.path for item in items if item.get_closest_marker("browser")})
     for item in items:
