@@ -65,10 +65,11 @@ test: install browser nginx
 	bash scripts/test.sh
 
 # While working: the tests a change touched (pytest-testmon: it remembers which code each test ran, in
-# .testmondata; the first run, with none yet, runs them all). Embedded wiring, neither the browser nor
+# .testmondata; the first run, with none yet, runs them all; -m would switch its selection off without
+# --testmon-forceselect). Embedded wiring, neither the browser nor
 # the topology tests; make test stays the whole suite.
 test-quick: install
-	env -u REDIS_URL -u DATABASE_URL $(BIN)/python -m pytest --testmon -m "not browser and not stack" -n 2 -q $(ARGS)
+	env -u REDIS_URL -u DATABASE_URL $(BIN)/python -m pytest --testmon --testmon-forceselect -m "not browser and not stack" -n 2 -q $(ARGS)
 
 # The suite N times (make test-repeat N=5): which tests ever failed, and how often.
 N ?= 5
