@@ -116,8 +116,7 @@ class AlertEngine:
                 self.apply(signal, now)
         guard = link.guard
         latched = bool(guard is not None and guard.latched)
-        by = str(link._latch_msg.get("by") or link._pressed_by or "")
-        at = float(link._pressed_at or link._latch_msg.get("at") or now)
+        by, at = link.last_press(now)
         self.apply(rules.estop(latched=latched, by=by, at=at), now)
         # Offline or hung, every component would go stale: that is the link's alert, not theirs.
         if link.connected and link.responding:

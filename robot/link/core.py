@@ -84,6 +84,15 @@ class LinkCore:
         self._in_order = asyncio.Lock()  # publishes one at a time through the fencing check
         self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
 
+    @property
+    def stopped(self) -> bool:
+        return self._stopped
+
+    def last_press(self, now: float) -> tuple[str, float]:
+        """Who pressed the E-STOP and when, as this link knows it: its own last press, else the stored latch."""
+        by = str(self._latch_msg.get("by") or self._pressed_by or "")
+        return by, float(self._pressed_at or self._latch_msg.get("at") or now)
+
     def _spawn(self, coro: Any) -> None:
         self._inflight.start(coro)
 

@@ -52,7 +52,7 @@ async def watch_liveness(link: Upkeep) -> None:
     probe: asyncio.Task | None = None
     probed_at = 0.0
     try:
-        while not link._stopped:
+        while not link.stopped:
             await asyncio.sleep(CHECK_EVERY_S)
             now = time.time()
             if link.connected and (probe is None or probe.done()) and now - probed_at >= PROBE_EVERY_S:
