@@ -48,7 +48,9 @@ class CmdVelGuard:
         self.latched = False
         self.changed_at = 0.0  # monotonic time this link last engaged or released itself
         self.moving = False  # the last Twist that went out was non-zero
-        self.release_first = False  # the connection dropped since the last zero: motion waits for one
+        # The connection dropped since the last zero: motion waits for one (or a fresh press). A new
+        # link starts so: it may be taking over from one that was lost (a failover, a restart).
+        self.release_first = True
         self._deadman: asyncio.TimerHandle | None = None
         self._hold: asyncio.Task | None = None
         self._tasks = Tasks()

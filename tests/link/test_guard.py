@@ -31,7 +31,7 @@ async def test_an_estop_the_robot_cannot_hear_still_latches_and_is_logged(caplog
 async def test_the_deadman_sends_one_zero_when_a_moving_stream_goes_quiet():
     zeros: list[float] = []
     stop = guard(lambda: zeros.append(1.0))
-    assert stop.check(FORWARD) is None
+    assert stop.check(FORWARD, fresh_press=True) is None
     await asyncio.sleep(0.3)
     assert zeros == [1.0] and not stop.moving
     stop.stop()
@@ -52,9 +52,18 @@ async def test_under_the_latch_only_what_stops_passes_and_the_stops_own_walk_onl
     stop.stop()
 
 
+async def test_a_new_link_moves_the_robot_only_for_a_fresh_press():
+    """It may be taking over from a link that was lost while a key was held (a failover, a restart)."""
+    stop = guard(lambda: None)
+    assert stop.check(FORWARD) == RELEASE_FIRST
+    assert stop.check(FORWARD, fresh_press=True) is None
+    assert stop.check(FORWARD) is None  # the press goes on
+    stop.stop()
+
+
 async def test_after_a_lost_connection_motion_waits_for_a_zero():
     stop = guard(lambda: None)
-    assert stop.check(FORWARD) is None
+    assert stop.check(FORWARD, fresh_press=True) is None
     stop.lost()  # a key was held when the connection dropped
     assert not stop.moving
     assert stop.check(FORWARD) == RELEASE_FIRST  # the held key, after the reconnect: refused

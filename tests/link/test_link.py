@@ -248,7 +248,7 @@ async def test_publishes_reach_the_robot_in_the_order_they_came_whatever_the_fen
     try:
         before = sim.robot.received_count(cmd_vel.name)
         replies = await asyncio.gather(*(link.execute({"op": "publish", "topic": cmd_vel.name, "msg_type": cmd_vel.type,
-                                                       "msg": msg}) for msg in (moving, zero)))
+                                                       "msg": msg, "fresh_press": True}) for msg in (moving, zero)))
         assert all(r["ok"] for r in replies), replies
         await async_wait_until(lambda: sim.robot.received_count(cmd_vel.name) == before + 2, timeout=5)
     finally:

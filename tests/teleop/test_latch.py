@@ -107,10 +107,11 @@ async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
 
 
 async def test_the_link_stops_the_robot_when_moving_twists_stop_arriving(link, sim, settings):
-    from robot.link.bus import apublish
+    from robot.link.bus import apublish, fresh_press
     from robot.teleop.twist import Command, twist
 
-    await apublish("cmd_vel", twist(Command(0.3, 0.0)))
+    with fresh_press():
+        await apublish("cmd_vel", twist(Command(0.3, 0.0)))
     count = len(await twists(sim))
     zero = await wait_twist(sim, is_zero, after=count, timeout=settings.TELEOP_LINK_DEADMAN_S + 1)
     assert zero is not None

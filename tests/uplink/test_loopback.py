@@ -152,10 +152,12 @@ def _twist(x: float) -> dict:
 
 
 async def _drive(link, x: float, seconds: float) -> None:
-    """The teleop rate (20 Hz) of Twists of forward speed ``x``, for ``seconds``."""
+    """A press from rest, then the teleop rate (20 Hz) of Twists of forward speed ``x``, for ``seconds``."""
     end = time.monotonic() + seconds
+    first = True
     while time.monotonic() < end:
-        reply = await link.execute(_twist(x))
+        reply = await link.execute({**_twist(x), "fresh_press": first})
+        first = False
         assert reply["ok"], reply
         await asyncio.sleep(0.05)
 
