@@ -60,11 +60,13 @@ class RobotLink(Serving):
         self.ros.factory.initialDelay = 0.5
         # The time is taken here, in the reactor's thread, so every message of the new connection
         # (stamped there too) is later than `since`: what came before a robot restart is older.
+        self.ros.on("ready", self._resubscribe)
         self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready, time.time()))
         self.ros.on("close", lambda *_: self._threadsafe(self._on_close))
         if getattr(self.ros.factory, "_proto", None) is not None:
             # With the reactor already running (a second link in a process, tests) the
             # connection can open before the "ready" handler above was registered.
+            self._was_ready = True
             self._threadsafe(self._on_ready, time.time())
         if not reactor.running:
             self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)

@@ -59,6 +59,7 @@ class LinkCore:
         self.loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: int | None = None
         self._subscriptions: dict[str, roslibpy.Topic] = {}
+        self._was_ready = False  # a connection was ready before (the next one subscribes again)
         # Who holds each upstream subscription (the registry, the recorder, watching pages, ...):
         # the subscription goes when its last holder lets go.
         self._holders: dict[str, set[str]] = {}

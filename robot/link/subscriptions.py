@@ -67,9 +67,19 @@ class Subscriptions(Upkeep):
         self._holders.setdefault(name, set()).add(holder)
         if name in self._subscriptions:
             return
-        topic = roslibpy.Topic(self.ros, name, msg_type)
+        topic = roslibpy.Topic(self.ros, name, msg_type, reconnect_on_close=False)  # see _resubscribe
         topic.subscribe(lambda msg, _n=name, _t=msg_type: self._received(_n, _t, msg))
         self._subscriptions[name] = topic
+
+    def _resubscribe(self, proto: Any) -> None:
+        """A new connection, on the reactor's thread before anything else goes out on it: subscribe again
+        at once. roslibpy would do it a second after the old connection closed, and what the robot says
+        meanwhile (the state_change answering a command sent at once) would never arrive."""
+        if not self._was_ready:
+            self._was_ready = True  # the first connection sends the subscriptions queued for it
+            return
+        for topic in list(self._subscriptions.values()):
+            proto.send_ros_message(topic._connect_message)
 
     def unsubscribe(self, name: str, *, holder: str = PINNED_HOLDER) -> None:
         """Let go of ``holder``'s hold on ``name``; the upstream subscription goes with the last holder

@@ -92,3 +92,16 @@ async def test_a_mode_change_after_a_restart_starts_from_startup_not_from_before
     state = state_of(robot)
     assert modes.state_reached(target, state), f"startup → {target.short}: the robot is in {state} ({outcome})"
     assert "startup → suspension" in outcome, outcome  # it walked out of startup first
+
+
+async def test_after_a_restart_the_robot_has_the_subscriptions_before_the_first_command(revived, link, sim):
+    """What the robot says in answer to a command sent at once (a state_change) reaches the server: the
+    link subscribes again on the new connection before it sends anything else there."""
+    from robot.link.bus import apublish
+
+    wait_ready(sim)
+    robot = await restart(link, sim, revived)
+    await apublish("text_to_speech", {"data": "hello again"})
+    speech = ri.topic("text_to_speech").name
+    await async_wait_until(lambda: robot.received_count(speech) > 0, timeout=10, what="the speech at the robot")
+    assert robot.subscription_count(ri.topic("state_change").name) > 0

@@ -8,6 +8,7 @@ import inspect
 from types import SimpleNamespace
 
 import pytest
+import roslibpy
 from django.core import checks
 from django.core.management import call_command
 from roslibpy.comm.comm import RosBridgeProtocol
@@ -91,3 +92,16 @@ def test_log_observer_canary():
     finally:
         observer.stop()
     assert observer.emit not in twisted_log.theLogPublisher.observers
+
+
+def test_topic_connect_message_canary():
+    """subscriptions sends a topic's ``_connect_message`` (its subscribe op) again on a new connection,
+    and ``reconnect_on_close=False`` keeps roslibpy from sending it a second later itself."""
+    sent: list[object] = []
+    ros = SimpleNamespace(id_counter=7, on=lambda *args: sent.append(("on", args[0])),
+                          send_on_ready=lambda message: sent.append(message))
+    topic = roslibpy.Topic(ros, "/odom", "nav_msgs/Odometry", reconnect_on_close=False)
+    topic.subscribe(lambda msg: None)
+    assert topic._connect_message["op"] == "subscribe" and topic._connect_message["topic"] == "/odom"
+    assert topic._connect_message in sent
+    assert ("on", "close") not in sent  # no delayed subscribe of its own after a close
