@@ -84,7 +84,7 @@ MIDDLEWARE = [
     "django.middleware.csrf.CsrfViewMiddleware",
     "django.contrib.auth.middleware.AuthenticationMiddleware",
     # An operator's signed E-STOP pass, for pressing it while the database is down.
-    "robot.api.estop_access.EstopPassMiddleware",
+    "robot.estop.access.EstopPassMiddleware",
     # Who changed an account, a role, a token or a setting (dashboard.access_audit).
     "dashboard.access_audit.ActorMiddleware",
     # The browser an account logged in from, let in while that account is flooded (dashboard.login_flood).

@@ -8,7 +8,7 @@ from cyborg_site.roles import is_admin, is_operator, role_of
 from dashboard.preferences import theme
 from dashboard.routing import LIVE_SOCKET_PATH
 from robot.api.commands import COMMAND_VIEWS
-from robot.commands.latch import latch
+from robot.estop.latch import latch
 
 
 def roles(request: HttpRequest) -> dict[str, Any]:

@@ -18,15 +18,25 @@ class RobotConfig(AppConfig):
         # Wherever the link runs: the map renderer, the goal tracker, where the robot is,
         # the state machine graph and the diagnostics.
         from robot.audio import link as audio
+        from robot.audio.talk import end_all_talk
+        from robot.estop import stop as estop
         from robot.introspection import tracking  # noqa: F401
         from robot.link import watching
         from robot.link.hosting import register_background
         from robot.link.releases import LINK_HOOKS
         from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
+        from robot.navigation.goals import cancel_every_goal
         from robot.overlays import link as overlays
+        from robot.teleop.driving import announce_release, free_for_the_stop
         from robot.uplink import hosting as uplink
 
         LINK_HOOKS.register_check()
+        # The features' own parts of the E-STOP.
+        estop.register_step("drive_lock", free_for_the_stop)
+        estop.register_step("talk", end_all_talk)
+        estop.register_step("cancel_navigation", cancel_every_goal)
+        estop.on_release(announce_release)
+        checks.register(check_estop_steps)
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()
         watching.install()  # any topic a page opens: leases, echo, listing and rates
@@ -34,6 +44,12 @@ class RobotConfig(AppConfig):
             register_background("uplink", uplink.serve_uplink)
 
         broadcast.connect()
+
+
+def check_estop_steps(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:
+    from robot.estop.stop import missing_steps
+
+    return [checks.Error(f"the E-STOP has no {name!r} step installed", id="robot.E005") for name in missing_steps()]
 
 
 def check_robot_settings(app_configs: Any, **kwargs: Any) -> list[CheckMessage]:

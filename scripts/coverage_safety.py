@@ -8,10 +8,10 @@ import sys
 import coverage
 
 SAFETY = {
-    "robot/teleop/estop.py": "E-STOP",
-    "robot/commands/latch.py": "latch",
-    "robot/commands/gate.py": "E-STOP gate (what each command does under the latch)",
-    "robot/api/estop_access.py": "E-STOP access with the database down",
+    "robot/estop/stop.py": "E-STOP",
+    "robot/estop/latch.py": "latch",
+    "robot/estop/rule.py": "E-STOP gate (what each command does under the latch)",
+    "robot/estop/access.py": "E-STOP access with the database down",
     "robot/commands/audit_journal.py": "audit journal (the E-STOP's audit with the database down)",
     "robot/live/locks.py": "the drive and talk locks, the mode change's (in-process and on Redis)",
     "robot/link/liveness.py": "liveness (a robot that stops answering is sent nothing that moves it)",

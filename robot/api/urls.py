@@ -9,7 +9,6 @@ from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
 from robot.api.base import API_AUTHENTICATION
 from robot.api.state import RobotStateView
-from robot.api.teleop import EstopReleaseView, EstopView
 
 router = SimpleRouter()
 router.register("locations", navigation.LocationViewSet, basename="api-location")
@@ -19,8 +18,6 @@ urlpatterns = [
     path("robot/state/", RobotStateView.as_view(), name="api-robot-state"),
     *(path(f"robot/{name}/", view.as_view(), name=f"api-robot-{name}")
       for name, view in commands.COMMAND_VIEWS.items()),
-    path("robot/estop/", EstopView.as_view(), name="robot-estop"),
-    path("robot/estop/release/", EstopReleaseView.as_view(), name="robot-estop-release"),
     path("audit/", AuditListView.as_view(), name="api-audit"),
     path("alerts/", alerts.alerts_view, name="api-alerts"),
     path("alerts/<str:alert_id>/ack/", alerts.acknowledge_view, name="api-alert-ack"),

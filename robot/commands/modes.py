@@ -30,10 +30,10 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.commands import moderoute
-from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, Command, arun
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
+from robot.estop.latch import ensure_released
 from robot.link import bus
 from robot.live import locks
 from robot.live.announce import apublish_state

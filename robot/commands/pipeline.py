@@ -1,6 +1,6 @@
 """The one path every command takes, from a page, the API, a websocket or a task:
 check the role, check the input, refuse it under the E-STOP if it moves the robot
-(``robot.commands.gate``), send it, write the audit entry, and hand back a clear outcome or error.
+(``robot.estop.rule``), send it, write the audit entry, and hand back a clear outcome or error.
 
 A command is a ``Command``: ``check`` validates the input *before* anything is sent (it may
 read the database, e.g. preset names) and ``send`` does the robot work on the event loop.
@@ -33,8 +33,8 @@ from asgiref.sync import async_to_sync, sync_to_async
 from cyborg_site.client_address import client_address
 from cyborg_site.roles import is_operator, roles_cached
 from robot.commands.audit_writer import writer
-from robot.commands.gate import Declaration, declaration
-from robot.commands.latch import ensure_released
+from robot.estop.latch import ensure_released
+from robot.estop.rule import Declaration, declaration
 from robot.link.bus import RobotError, stopping
 
 
@@ -92,7 +92,7 @@ class Command:
 
     ``send`` gets what ``check`` returned and returns the outcome for a person; whatever else
     a caller needs back (a goal, a report) it leaves in ``result``. Whether it moves the robot
-    is declared by its action in ``robot.commands.gate`` (an undeclared action is refused here).
+    is declared by its action in ``robot.estop.rule`` (an undeclared action is refused here).
     """
 
     action: str

@@ -30,7 +30,7 @@ SMACH_GRAPH_KEY = "smach_graph"  # the state machine's containers as a graph (ro
 SMACH_ACTIVE_KEY = "smach_active"  # its active states, and the events that leave them
 DIAGNOSTICS_KEY = "diagnostics_summary"  # the latest diagnostics of every component
 ALERTS_KEY = "alerts"  # the alerts on now (written by robot.alerts.engine where the link runs)
-LATCH_KEY = "estop"  # the E-STOP latch (written by robot.commands.latch, read by the link)
+LATCH_KEY = "estop"  # the E-STOP latch (written by robot.estop.latch, read by the link)
 # Map overlays, made by the link from the robot's topics (robot.overlays): map-frame shapes, costmap tiles.
 OVERLAY_SCAN_KEY = "overlay_scan"
 OVERLAY_PARTICLES_KEY = "overlay_particles"

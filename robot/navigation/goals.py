@@ -65,6 +65,14 @@ async def apublish_action(action_key: str, suffix: str, msg: dict[str, Any]) -> 
     await arequest("publish", topic=name, msg_type=msg_type, msg=msg)
 
 
+async def cancel_every_goal(by: str) -> str:
+    """The E-STOP's step: an empty goal id cancels every goal of the server, ours and any a
+    robot-side node sent."""
+    for key in ("move_base", "navigation"):
+        await apublish_action(key, "cancel", cancel_message())
+    return "all navigation goals cancelled"
+
+
 async def astart_goal(*, action: str, msg: dict[str, Any], goal_id: str, user: Any, x: float, y: float, yaw: float,
                       location: str | None = None) -> dict[str, Any]:
     """Send an action goal and make it the current goal for every watcher (input already checked)."""

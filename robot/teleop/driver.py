@@ -20,9 +20,9 @@ from typing import Any
 
 from django.conf import settings
 
-from robot.commands.latch import alatch
 from robot.commands.motors import MotorsOff, ensure_motors_on
 from robot.commands.pipeline import Busy, Forbidden, InvalidCommand
+from robot.estop.latch import alatch
 from robot.link.bus import EstopEngaged, RobotError
 from robot.live.locks import HeldLock, Holder
 from robot.supervisor import Tasks

@@ -10,8 +10,8 @@ from channels.layers import get_channel_layer
 
 from cyborg_site.roles import is_admin
 from robot.commands.audit import audit_record
-from robot.commands.latch import ensure_released
 from robot.commands.pipeline import Busy, arun_command
+from robot.estop.latch import ensure_released
 from robot.link.bus import EstopEngaged, RobotError, RobotNotResponding
 from robot.live.groups import LOCK_GROUP, STATUS_KEY
 from robot.live.locks import HeldLock, Holder
@@ -34,6 +34,18 @@ async def announce(holder: Holder | None, reason: str) -> None:
         "owner": holder.owner if holder else None, "reason": reason,
     }
     await get_channel_layer().group_send(LOCK_GROUP, event)
+
+
+async def free_for_the_stop(by: str) -> str:
+    """The E-STOP's step: free the drive lock. Every teleop loop's next refresh fails and the
+    announcement stops them at once; the latch refuses the lock to anyone until it is released."""
+    previous = await get_lock().clear()
+    await announce(None, "estop")
+    return f"{previous.username} stopped driving" if previous else "nobody was driving"
+
+
+async def announce_release() -> None:
+    await announce(None, "estop_release")
 
 
 async def lock_acquire(*, user: Any, me: Holder, lock: HeldLock | None = None) -> None:

@@ -120,7 +120,7 @@ async def test_an_alert_acknowledged_before_it_is_kept_is_kept_acknowledged(link
 
 
 async def test_the_estop_raises_a_critical_alert_until_it_is_released(link, sim, raiser, viewer, operator):
-    from robot.teleop.estop import estop_release, estop_run
+    from robot.estop.stop import estop_release, estop_run
 
     communicator = ws_communicator(viewer)
     assert (await communicator.connect(timeout=10))[0]

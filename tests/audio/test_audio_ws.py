@@ -133,7 +133,7 @@ async def test_a_talk_whose_audio_never_comes_is_cut(link, sim, operator, admin_
 
 
 async def test_estop_ends_talking_and_refuses_a_new_talk(link, sim, operator):
-    from robot.teleop.estop import estop_run
+    from robot.estop.stop import estop_run
 
     mouth = await audio_socket(operator)
     await mouth.send(TALK)

@@ -8,9 +8,9 @@ from typing import Any
 import pytest
 
 from robot import interface as ri
-from robot.commands.gate import MOVES
 from robot.commands.pipeline import Command
 from robot.commands.tool import STRING_COMMANDS
+from robot.estop.rule import MOVES
 
 ROBOT = Path(__file__).resolve().parents[2] / "robot"
 
@@ -67,8 +67,8 @@ def test_an_undeclared_command_cannot_be_built():
 
 @pytest.mark.django_db(transaction=True)
 async def test_under_the_latch_what_moves_is_refused_and_audited_and_the_rest_is_sent(operator):
-    from robot.commands.latch import aengage, arelease
     from robot.commands.pipeline import arun
+    from robot.estop.latch import aengage, arelease
     from robot.link.bus import EstopEngaged
     from robot.models import AuditEntry
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from robot.commands.latch import aengage, alatch, arecord_steps, arelease
+from robot.estop.latch import aengage, alatch, arecord_steps, arelease
 
 pytestmark = pytest.mark.wiring  # the latest-state store, in memory or Redis
 

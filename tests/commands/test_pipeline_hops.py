@@ -26,12 +26,12 @@ def _counting(real: Callable[..., Any], calls: list[str]) -> Callable[..., Any]:
 
 
 def test_an_estop_from_the_api_crosses_to_the_event_loop_once(operator_api, monkeypatch):
-    from robot.api import teleop as api_teleop
+    from robot.estop import views as estop_views
     from robot.commands import pipeline
 
     calls: list[str] = []
     monkeypatch.setattr(pipeline, "async_to_sync", _counting(pipeline.async_to_sync, calls))
-    monkeypatch.setattr(api_teleop, "async_to_sync", _counting(api_teleop.async_to_sync, calls))
+    monkeypatch.setattr(estop_views, "async_to_sync", _counting(estop_views.async_to_sync, calls))
     response = operator_api.post("/api/robot/estop/")  # no robot: every robot step fails, the rest runs
     assert response.status_code == 502 and response.json()["latch"]["latched"] is True
     assert calls == ["_send"]

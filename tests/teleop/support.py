@@ -64,7 +64,7 @@ STILL_TRYING = "(still trying)"
 async def settled_steps(timeout: float = 30.0) -> dict[str, dict[str, Any]]:
     """The E-STOP's steps as they ended: on a loaded machine a step can answer after the report (which
     says it is still trying), and is kept with the latch when it ends."""
-    from robot.commands.latch import alatch
+    from robot.estop.latch import alatch
 
     deadline = time.monotonic() + timeout
     while True:

@@ -97,7 +97,7 @@ def test_it_shows_the_button_to_operators_only_on_every_page(client, operator, v
 
 
 async def test_it_ends_the_active_teleop_session_and_frees_the_lock(link, sim, operator):
-    from robot.teleop.estop import estop_run
+    from robot.estop.stop import estop_run
     from robot.teleop.lock import get_lock
 
     ws = await drive_socket(operator)

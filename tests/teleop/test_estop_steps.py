@@ -8,8 +8,8 @@ import asyncio
 
 import pytest
 
+from robot.estop import stop as estop
 from robot.models import AuditEntry
-from robot.teleop import estop
 from tests.teleop.support import settled_steps
 
 pytestmark = pytest.mark.django_db(transaction=True)
@@ -44,7 +44,7 @@ async def test_a_step_that_hangs_or_breaks_is_reported_and_every_other_step_stil
 
 
 async def test_with_no_robot_it_latches_says_what_failed_and_the_release_still_clears_it(operator):
-    from robot.commands.latch import alatch
+    from robot.estop.latch import alatch
 
     report = await estop.estop_run(user=operator, source="api")  # no link in this process, no robot
     assert not report.ok

@@ -27,7 +27,7 @@ def olga(db):
 
 async def test_a_held_key_never_moves_the_robot_again(link, sim, operator, olga):
     """Otto holds W while Olga presses E-STOP: no non-zero Twist after the stop's zero."""
-    from robot.teleop.estop import estop_run
+    from robot.estop.stop import estop_run
     from robot.teleop.lock import get_lock
 
     ws = await drive_socket(operator)
@@ -62,7 +62,7 @@ async def test_a_held_key_never_moves_the_robot_again(link, sim, operator, olga)
 
 
 async def test_lock_requests_and_takeovers_are_refused_while_latched(link, sim, operator, admin_user):
-    from robot.teleop.estop import estop_run
+    from robot.estop.stop import estop_run
 
     await estop_run(user=operator, source="page")
     for user, request in ((operator, {"type": "acquire"}), (admin_user, {"type": "takeover"}),
@@ -94,7 +94,7 @@ async def test_the_link_refuses_motion_and_holds_zero_while_latched(link, sim, s
 
 async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
     """A press while the link could not be told (another process, a dead command path)."""
-    from robot.commands.latch import aengage, arelease
+    from robot.estop.latch import aengage, arelease
     from robot.link.bus import EstopEngaged, apublish
     from robot.teleop.twist import Command, twist
 
@@ -206,8 +206,8 @@ async def test_a_mode_change_under_way_sends_nothing_after_the_estop_answers(lin
     emotion-system message reaches the robot after the stop's answer, and the robot ends in
     suspension with its emotion system off."""
     from robot.commands.modes import achange_mode
+    from robot.estop.stop import estop_release, estop_run
     from robot.link.bus import RobotError
-    from robot.teleop.estop import estop_release, estop_run
 
     names = [ri.topic(key).name for key in ("register_event", "emotional_controller", "robot_mode")]
     wait_ready(sim)

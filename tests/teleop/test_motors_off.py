@@ -91,7 +91,7 @@ async def test_a_hung_robot_is_not_handed_the_drive_lock(frozen_link, sim_proces
 async def test_a_key_that_meets_the_stop_before_its_lock_news_is_refused_for_the_stop(link, sim, operator):
     """The E-STOP turns the motors off; a key still held by the driver, arriving before the news that
     the lock was taken, is refused for the stop (its true reason), audited once."""
-    from robot.commands.latch import aengage, arelease
+    from robot.estop.latch import aengage, arelease
 
     ws = await drive_socket(operator)
     await ws.send_json_to(key(0.5))

@@ -15,11 +15,11 @@ from rest_framework.response import Response
 
 from robot.api.base import RobotAPIView, run
 from robot.api.common import error_responses, shape
-from robot.api.estop_access import EstopAccessMixin
-from robot.commands.latch import alatch
-from robot.teleop.estop import STEPS, EstopIncomplete, estop_command, estop_outcome, release_command
+from robot.estop.access import EstopAccessMixin
+from robot.estop.latch import alatch
+from robot.estop.stop import ORDER, EstopIncomplete, estop_command, estop_outcome, release_command
 
-EstopStep = shape("EstopStep", step=serializers.ChoiceField(choices=["latch", *(name for name, _ in STEPS)]),
+EstopStep = shape("EstopStep", step=serializers.ChoiceField(choices=["latch", *ORDER]),
                   ok=serializers.BooleanField(), detail=serializers.CharField())
 EstopOutput = shape(
     "EstopOutput", ok=serializers.BooleanField(), steps=EstopStep(many=True),

@@ -63,5 +63,5 @@ def declaration(action: str) -> Declaration:
         return MOVES[action]
     except KeyError:
         raise LookupError(
-            f"command {action!r} is not declared in robot.commands.gate.MOVES: say whether it moves the robot"
+            f"command {action!r} is not declared in robot.estop.rule.MOVES: say whether it moves the robot"
         ) from None

@@ -12,15 +12,11 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
-from robot.audio.talk import end_all_talk
-from robot.commands.latch import Latch, aengage, alatch, arecord_steps, arelease
 from robot.commands.modes import perform_stop
 from robot.commands.pipeline import Command, InvalidCommand, arun
+from robot.estop.latch import Latch, aengage, alatch, arecord_steps, arelease
 from robot.link.bus import RobotError, acall_service, arequest, emergency
-from robot.navigation.goals import apublish_action, cancel_message
 from robot.supervisor import spawn
-from robot.teleop.driving import announce
-from robot.teleop.lock import get_lock
 
 log = logging.getLogger(__name__)
 
@@ -69,36 +65,41 @@ async def _zero_velocity(by: str) -> str:
     return "zero Twist sent and held"
 
 
-async def _block_driving(by: str) -> str:
-    """Free the drive lock: every teleop loop's next refresh fails and the announcement stops
-    them at once; the latch refuses the lock to anyone until it is released."""
-    previous = await get_lock().clear()
-    await announce(None, "estop")
-    return f"{previous.username} stopped driving" if previous else "nobody was driving"
-
-
-async def _cancel_navigation(by: str) -> str:
-    # An empty goal id cancels every goal of the server: ours, and any a robot-side node sent.
-    for key in ("move_base", "navigation"):
-        await apublish_action(key, "cancel", cancel_message())
-    return "all navigation goals cancelled"
-
-
 async def _disable_motors(by: str) -> str:
     await acall_service("disable_motors", timeout=STEP_TIMEOUT_S)
     return "motors disabled"
 
 
-Step = Callable[[str], Awaitable[str]]
+Step = Callable[[str], Awaitable[str]]  # given who pressed, what it did (or raises)
+# Every step of the stop, in the order reports list them (the latch comes first, see estop_steps). The
+# features' own steps (drive lock, talk, navigation) are theirs: robot.apps registers them.
+ORDER = ("zero_velocity", "drive_lock", "talk", "cancel_navigation", "disable_motors", "mode_stop")
 STEPS: tuple[tuple[str, Step], ...] = (
     ("zero_velocity", _zero_velocity),
-    ("drive_lock", _block_driving),
-    ("talk", end_all_talk),
-    ("cancel_navigation", _cancel_navigation),
     ("disable_motors", _disable_motors),
     # The raw mode change: an e-stop is never refused because a mode change is under way.
     ("mode_stop", lambda by: perform_stop(requested_by=by)),
 )
+_released: list[Callable[[], Awaitable[None]]] = []
+
+
+def register_step(name: str, step: Step) -> None:
+    """A feature's own part of the stop, kept in its place in ``ORDER``."""
+    global STEPS
+    if name not in ORDER:
+        raise LookupError(f"{name!r} is not a step of the E-STOP (robot.estop.stop.ORDER)")
+    steps = {**dict(STEPS), name: step}
+    STEPS = tuple((key, steps[key]) for key in ORDER if key in steps)
+
+
+def on_release(announce: Callable[[], Awaitable[None]]) -> None:
+    """A feature that must hear the release at once (the drivers' sockets)."""
+    if announce not in _released:
+        _released.append(announce)
+
+
+def missing_steps() -> list[str]:
+    return [name for name in ORDER if name not in dict(STEPS)]
 
 
 async def _attempt(name: str, step: Step, by: str) -> StepResult:
@@ -214,7 +215,8 @@ def release_command(user: Any, confirm: Any) -> Command:
         except RobotError as exc:
             # The link reads the latch from the shared store every few seconds and follows.
             log.warning("the link did not take the e-stop release at once: %s", exc.message)
-        await announce(None, "estop_release")
+        for announce in _released:
+            await announce()
         if not current.latched:
             return "E-STOP was not engaged"
         return f"E-STOP released ({current.message})"
