@@ -12,6 +12,7 @@ import roslibpy
 
 from robot import interface as ri
 from robot.link.guard import CmdVelGuard
+from robot.link.rosclient import Publishers
 from robot.live.fanout import Coalescer
 from robot.live.state import StateStore
 from robot.supervisor import Tasks
@@ -63,7 +64,7 @@ class LinkCore:
         # Who holds each upstream subscription (the registry, the recorder, watching pages, ...):
         # the subscription goes when its last holder lets go.
         self._holders: dict[str, set[str]] = {}
-        self._publishers: dict[str, roslibpy.Topic] = {}
+        self._publishers = Publishers()
         self._tasks: list[asyncio.Task] = []
         self._coalescer: Coalescer | None = None
         self._stopped = False

@@ -162,6 +162,19 @@ async def call_service(ros: roslibpy.Ros, name: str, service_type: str, args: di
     return {"ok": False, "error_code": "failed", "error": str(value)}
 
 
+class Publishers:
+    """One advertised topic per name on a connection: roslibpy advertises it with the first publish."""
+
+    def __init__(self) -> None:
+        self._topics: dict[str, roslibpy.Topic] = {}
+
+    def publish(self, ros: roslibpy.Ros, name: str, msg_type: str, msg: dict[str, Any]) -> None:
+        topic = self._topics.get(name)
+        if topic is None:
+            topic = self._topics[name] = roslibpy.Topic(ros, name, msg_type, queue_size=10)
+        topic.publish(Message(msg))
+
+
 def close_quietly(ros: roslibpy.Ros) -> None:
     """Close a rosbridge connection (blocking: from a worker thread), whatever state it is in."""
     try:

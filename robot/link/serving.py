@@ -9,8 +9,6 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any, cast
 
-import roslibpy
-
 from robot import interface as ri
 from robot.link.core import RECONNECT_INTERVAL_S
 from robot.link.guard import RELEASE_FIRST
@@ -110,7 +108,8 @@ class Serving(Subscriptions):
             refused = self._held_back(request, request["topic"], request["msg"])
             if refused:
                 return refused
-            self._publisher(request["topic"], request["msg_type"]).publish(roslibpy.Message(request["msg"]))
+            assert self.ros is not None
+            self._publishers.publish(self.ros, request["topic"], request["msg_type"], request["msg"])
             return {"ok": True}
         if op == "call_service":
             return await self._call_service(request)
@@ -140,13 +139,7 @@ class Serving(Subscriptions):
         if self.lease is not None and not self.lease.may_stop:
             raise RuntimeError("this robot link no longer holds the lease")
         cmd_vel = ri.topic("cmd_vel")
-        self._publisher(cmd_vel.name, cmd_vel.type).publish(roslibpy.Message(ri.ZERO_TWIST))
-
-    def _publisher(self, name: str, msg_type: str) -> roslibpy.Topic:
-        topic = self._publishers.get(name)
-        if topic is None:
-            topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
-        return topic
+        self._publishers.publish(self.ros, cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
 
     async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
                    timeout: float | None = None) -> LinkReply:

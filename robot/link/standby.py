@@ -21,9 +21,9 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.link import direct
-from robot.link.rosclient import LinkRos, call_service, close_quietly
+from robot.link.guard import CmdVelGuard
+from robot.link.rosclient import LinkRos, Publishers, call_service, close_quietly
 from robot.live.groups import LinkReply, LinkRequest
-from robot.supervisor import Tasks
 
 log = logging.getLogger(__name__)
 
@@ -31,8 +31,8 @@ class StandbyStop:
     def __init__(self, url: str) -> None:
         self.url = url
         self.ros: roslibpy.Ros | None = None
-        self._publishers: dict[str, roslibpy.Topic] = {}
-        self._holds = Tasks()
+        self._publishers = Publishers()
+        self.guard: CmdVelGuard | None = None
 
     async def run(self) -> None:
         """Connect (and keep reconnecting) and answer on the direct path until cancelled."""
@@ -40,12 +40,16 @@ class StandbyStop:
 
         self.ros = LinkRos(self.url)
         self.ros.factory.maxDelay = settings.ROBOT_LINK_MAX_BACKOFF_S
+        # The link's own guard, latched for good: a zero Twist (held) and what passes the latch.
+        self.guard = CmdVelGuard(self._publish_zero, loop=asyncio.get_running_loop(), rate_hz=settings.TELEOP_RATE_HZ,
+                                 hold_s=settings.ESTOP_HOLD_S, deadman_s=settings.TELEOP_LINK_DEADMAN_S)
+        self.guard.latched = True
         if not reactor.running:
             self.ros.factory.manager.run()
         try:
             await direct.serve(self.answer)
         finally:
-            self._holds.cancel()
+            self.guard.stop()
             ros, self.ros = self.ros, None
             ros.factory.stopTrying()
             if ros.is_connected:
@@ -58,36 +62,24 @@ class StandbyStop:
         return reply
 
     async def _stop(self, request: LinkRequest) -> LinkReply:
-        if self.ros is None or not self.ros.is_connected:
+        if self.ros is None or not self.ros.is_connected or self.guard is None:
             return {"ok": False, "error_code": "offline", "error": "standby link: no connection to the robot"}
         op = request.get("op")
-        cmd_vel = ri.topic("cmd_vel")
         if op == "estop":
-            self._publish(cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
-            self._holds.start(self._hold_zero())
+            self.guard.engage()
             return {"ok": True}
         name = request.get("topic") if op == "publish" else request.get("service")
         msg: dict[str, Any] = (request.get("msg") if op == "publish" else request.get("args")) or {}
-        stops = ri.is_zero_twist(msg) if name == cmd_vel.name else ri.passes_latch(str(name), msg, by_the_stop=True)
-        if op not in ("publish", "call_service") or not stops:
+        if op not in ("publish", "call_service") or self.guard.check_publish(str(name), msg, by_the_stop=True):
             return {"ok": False, "error_code": "offline", "error": "a standby link only stops the robot"}
         if op == "publish":
-            self._publish(request["topic"], request["msg_type"], msg)
+            self._publishers.publish(self.ros, request["topic"], request["msg_type"], msg)
             return {"ok": True}
         timeout = float(request.get("timeout") or settings.ROBOT_REQUEST_TIMEOUT_S)
         return await call_service(self.ros, request["service"], request["service_type"], msg, timeout)
 
-    def _publish(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
-        assert self.ros is not None
-        topic = self._publishers.get(name)
-        if topic is None:
-            topic = self._publishers[name] = roslibpy.Topic(self.ros, name, msg_type, queue_size=10)
-        topic.publish(roslibpy.Message(msg))
-
-    async def _hold_zero(self) -> None:
+    def _publish_zero(self) -> None:
+        if self.ros is None or not self.ros.is_connected:
+            raise RuntimeError("standby link: robot offline")
         cmd_vel = ri.topic("cmd_vel")
-        loop = asyncio.get_running_loop()
-        end = loop.time() + settings.ESTOP_HOLD_S
-        while loop.time() < end and self.ros is not None and self.ros.is_connected:
-            await asyncio.sleep(1.0 / settings.TELEOP_RATE_HZ)
-            self._publish(cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
+        self._publishers.publish(self.ros, cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
