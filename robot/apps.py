@@ -20,11 +20,11 @@ class RobotConfig(AppConfig):
         from robot.audio import link as audio
         from robot.audio.talk import end_all_talk
         from robot.estop import stop as estop
-        from robot.introspection import tracking  # noqa: F401
+        from robot.introspection import tracking
         from robot.link import watching
         from robot.link.hosting import register_background
         from robot.link.releases import LINK_HOOKS
-        from robot.navigation import broadcast, handlers, whereabouts  # noqa: F401
+        from robot.navigation import broadcast, handlers, whereabouts
         from robot.navigation.goals import cancel_every_goal
         from robot.overlays import link as overlays
         from robot.teleop.driving import announce_release, free_for_the_stop
@@ -40,6 +40,9 @@ class RobotConfig(AppConfig):
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()
         watching.install()  # any topic a page opens: leases, echo, listing and rates
+        tracking.install()
+        handlers.install()
+        whereabouts.install()
         if settings.UPLINK:  # the robot's agent connects to the process that hosts the link
             register_background("uplink", uplink.serve_uplink)
 

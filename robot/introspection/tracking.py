@@ -145,5 +145,6 @@ async def track_diagnostics(link: RobotLink, *, refresh_s: float = DIAGNOSTICS_R
         link.listeners.remove(listener)
 
 
-register_background("introspection-smach", track_smach)
-register_background("introspection-diagnostics", track_diagnostics)
+def install() -> None:
+    register_background("introspection-smach", track_smach)
+    register_background("introspection-diagnostics", track_diagnostics)

@@ -66,8 +66,6 @@ async def _render_and_publish(msg: dict[str, Any], t: float, seq: int) -> None:
     await apublish_state(MAP_META_KEY, map_meta(rendered, msg, t), t)
 
 
-register_handler("map", on_map, arrays=True)
-
 
 # --- goal statuses ---------------------------------------------------------------------------
 
@@ -103,4 +101,6 @@ async def track_goal_statuses(link: RobotLink) -> None:
         link.listeners.remove(listener)
 
 
-register_background("navigation-goal-statuses", track_goal_statuses)
+def install() -> None:
+    register_handler("map", on_map, arrays=True)
+    register_background("navigation-goal-statuses", track_goal_statuses)

@@ -109,4 +109,5 @@ async def track_whereabouts(link: RobotLink) -> None:
         link.listeners.remove(listener)
 
 
-register_background("navigation-whereabouts", track_whereabouts)
+def install() -> None:
+    register_background("navigation-whereabouts", track_whereabouts)

@@ -26,8 +26,8 @@ def _counting(real: Callable[..., Any], calls: list[str]) -> Callable[..., Any]:
 
 
 def test_an_estop_from_the_api_crosses_to_the_event_loop_once(operator_api, monkeypatch):
-    from robot.estop import views as estop_views
     from robot.commands import pipeline
+    from robot.estop import views as estop_views
 
     calls: list[str] = []
     monkeypatch.setattr(pipeline, "async_to_sync", _counting(pipeline.async_to_sync, calls))
