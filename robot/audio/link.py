@@ -26,6 +26,7 @@ import roslibpy
 from robot import interface as ri
 from robot.audio.mic import DecodeError, Mp3Decoder, PcmRelay, Unplayable, decoder_for, playback_format
 from robot.link.connection import RobotLink, one_per_link
+from robot.link.holders import Leases
 from robot.link.serving import register_operation
 from robot.link.subscriptions import register_handler
 from robot.live.groups import MIC_GROUP, LinkReply, LinkRequest, SharedMessage
@@ -33,9 +34,6 @@ from robot.supervisor import Tasks, running
 
 log = logging.getLogger(__name__)
 
-# A listener renews its lease every LISTEN_RENEW_S; one not renewed for LISTEN_LEASE_S is gone.
-LISTEN_RENEW_S = 2.0
-LISTEN_LEASE_S = 6.0
 PROBLEM_EVERY_S = 5.0
 HOLDER = "audio"  # this module's hold on the microphone's upstream subscription
 
@@ -46,7 +44,7 @@ class Listeners:
 
     def __init__(self, link: RobotLink) -> None:
         self.link = link
-        self.leases: dict[str, float] = {}  # listener id -> expiry (monotonic)
+        self.leases = Leases()  # the microphone's topic -> listener ids (robot.link.holders)
         self.topic = ri.topic("audio")
         self.info_topic = ri.topic("audio_info").name
         self.info: dict[str, Any] | None = None
@@ -96,15 +94,13 @@ class Listeners:
 
     def set(self, listener: str, on: bool) -> None:
         if on:
-            self.leases[listener] = time.monotonic() + LISTEN_LEASE_S
+            self.leases.renew(self.topic.name, listener)
         else:
-            self.leases.pop(listener, None)
+            self.leases.drop(self.topic.name, listener)
         self.sweep()
 
     def sweep(self) -> None:
-        now = time.monotonic()
-        for listener in [k for k, expiry in self.leases.items() if expiry <= now]:
-            del self.leases[listener]
+        self.leases.expire()
         if self.leases:
             if self.topic.name not in self.link.subscribed:
                 self.decoder = None  # a new stream
@@ -127,7 +123,8 @@ def chunk_bytes(msg: dict[str, Any]) -> bytes:
 async def _listen(link: RobotLink, request: LinkRequest) -> LinkReply:
     await listeners_of(link).load_info()
     listeners_of(link).set(str(request["listener"]), bool(request.get("on")))
-    return {"ok": True, "listeners": len(listeners_of(link).leases)}
+    listeners = listeners_of(link)
+    return {"ok": True, "listeners": len(listeners.leases.holders(listeners.topic.name))}
 
 
 async def _declare(link: RobotLink, request: LinkRequest) -> LinkReply:

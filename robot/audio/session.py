@@ -32,13 +32,13 @@ from typing import Any
 from channels.db import database_sync_to_async
 from django.conf import settings
 
-from robot.audio.link import LISTEN_RENEW_S
 from robot.audio.mic import Unplayable, playback_format
 from robot.audio.pcm import Pacer, chunk_problem, format_problem
 from robot.audio.talk import TalkEvent, announce_talker, get_talk_lock, talk_view
 from robot.commands.audit import audit_record
 from robot.commands.pipeline import Busy, InvalidCommand, arun_command
 from robot.link.bus import RobotError, apublish, arequest
+from robot.link.holders import RENEW_S
 from robot.live.locks import HeldLock, Holder
 from robot.live.state import get_store
 from robot.supervisor import Tasks
@@ -135,7 +135,7 @@ class AudioSession:
 
     async def _renew(self) -> None:
         while True:
-            await asyncio.sleep(LISTEN_RENEW_S)
+            await asyncio.sleep(RENEW_S)
             if self.listening_since is None:
                 return
             try:

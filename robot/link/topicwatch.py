@@ -4,7 +4,7 @@ A page's socket opens a topic (``watch``) and closes it (``unwatch``, or by goin
 The registry topics its live keys need (a map overlay's) it holds the same way (``hold``), only
 not echoed. The first socket of the process on a topic, and the last one leaving it, send the
 process's whole set to the link (``topics_watch``); a supervised loop renews it every
-``WATCH_RENEW_S``, so a link that restarted (or took over) has every lease back within seconds
+``RENEW_S``, so a link that restarted (or took over) has every lease back within seconds
 and a dead web process's leases run out by themselves. Syncs go one at a time so the link sees
 them in order.
 """
@@ -22,7 +22,8 @@ from typing import Any
 
 from robot import interface as ri
 from robot.link.bus import RobotError, RobotOffline, arequest
-from robot.link.watching import WATCH_RENEW_S, TopicRefused
+from robot.link.holders import RENEW_S
+from robot.link.watching import TopicRefused
 from robot.supervisor import supervise
 
 log = logging.getLogger(__name__)
@@ -104,7 +105,7 @@ class LocalWatches:
 
     async def _renew_forever(self) -> None:
         while self.watchers or self.holding:
-            await asyncio.sleep(WATCH_RENEW_S)
+            await asyncio.sleep(RENEW_S)
             if self.watchers or self.holding:
                 await self._sync_quietly()
 

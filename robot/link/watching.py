@@ -1,8 +1,8 @@
 """Any topic a page opens, where the link runs: one upstream subscription however many pages watch.
 
 Each web process holds one lease per topic its pages watch (``topics_watch``: the process's whole
-set of watched topics, sent on every change and renewed every ``WATCH_RENEW_S``); a lease not
-renewed for ``WATCH_LEASE_S`` is gone (its web process died). The link holds the upstream
+set of watched topics, sent on every change and renewed, ``robot.link.holders``); a lease not
+renewed is gone (its web process died). The link holds the upstream
 subscription while any lease lives; when the last one goes it waits ``TOPICS_IDLE_GRACE_S`` and
 then lets go (the subscription stays if the registry, the recorder or anyone else still holds it).
 The same request also holds, by registry key, the robot topics the pages' live keys need that
@@ -29,6 +29,7 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.link.connection import RobotLink, one_per_link, register_start
+from robot.link.holders import Leases
 from robot.link.serving import register_operation
 from robot.live.announce import aannounce
 from robot.live.fanout import Coalescer
@@ -38,8 +39,6 @@ from robot.supervisor import supervise
 
 log = logging.getLogger(__name__)
 
-WATCH_RENEW_S = 2.0
-WATCH_LEASE_S = 6.0
 SWEEP_S = 0.1
 HOLDER = "watch"  # this module's hold on the link's upstream subscriptions
 ECHO_PREFIX = "topic:"
@@ -72,8 +71,8 @@ class Watches:
 
     def __init__(self, link: RobotLink) -> None:
         self.link = link
-        self.leases: dict[str, dict[str, float]] = {}  # topic -> holder -> expiry (monotonic): echoed to pages
-        self.holds: dict[str, dict[str, float]] = {}  # the same for registry topics held for live keys
+        self.leases = Leases()  # topic -> holders: echoed to pages
+        self.holds = Leases()  # the same for registry topics held for live keys
         self.idle_since: dict[str, float] = {}  # topic -> when its last lease went (the grace period runs)
         self.types: dict[str, str] = {}
         self.counters: dict[int, tuple[str, list[float]]] = {}  # rate measurements: id -> (topic, receive times)
@@ -94,10 +93,8 @@ class Watches:
         wanted = list(dict.fromkeys(topics))
         refused: dict[str, dict[str, str]] = {}
         kept = self._registry_topics(held or [], refused)
-        for table, names in ((self.leases, wanted), (self.holds, kept)):
-            for name, leases in table.items():
-                if name not in names:
-                    leases.pop(holder, None)
+        self.leases.keep_only(holder, wanted)
+        self.holds.keep_only(holder, kept)
         for name in wanted:
             try:
                 msg_type = await self.resolve(name)
@@ -117,8 +114,8 @@ class Watches:
         self.sweep()
         return refused
 
-    def _lease(self, table: dict[str, dict[str, float]], name: str, msg_type: str, holder: str) -> None:
-        table.setdefault(name, {})[holder] = time.monotonic() + WATCH_LEASE_S
+    def _lease(self, table: Leases, name: str, msg_type: str, holder: str) -> None:
+        table.renew(name, holder)
         self.idle_since.pop(name, None)
         self.link.subscribe(name, msg_type, holder=HOLDER)
 
@@ -157,14 +154,9 @@ class Watches:
 
     def sweep(self) -> None:
         now = time.monotonic()
-        for table in (self.leases, self.holds):
-            for name, leases in list(table.items()):
-                for holder in [h for h, expiry in leases.items() if expiry <= now]:
-                    del leases[holder]
-                if not leases:
-                    del table[name]
-                    if name not in self.leases and name not in self.holds:
-                        self.idle_since[name] = now
+        for name in [*self.leases.expire(), *self.holds.expire()]:
+            if name not in self.leases and name not in self.holds:
+                self.idle_since[name] = now
         grace = settings.TOPICS_IDLE_GRACE_S
         for name, since in list(self.idle_since.items()):
             if now - since >= grace:

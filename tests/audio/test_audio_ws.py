@@ -183,7 +183,7 @@ async def test_after_listen_off_the_microphone_stays_off(link, sim, operator):
     ears = await audio_socket(operator)
     await ears.send({"type": "listen", "on": True})
     await ears.text(kind("listening", on=True))
-    await asyncio.sleep(session.LISTEN_RENEW_S * 1.5)  # a renewal done, the next one waiting
+    await asyncio.sleep(session.RENEW_S * 1.5)  # a renewal done, the next one waiting
     await ears.send({"type": "listen", "on": False})
     await ears.text(kind("listening", on=False))
     await async_wait_until(lambda: sim.subscription_count(MIC) == 0, what="microphone unsubscribed")

@@ -6,7 +6,7 @@ import pytest
 
 from robot import interface as ri
 from robot import supervisor
-from robot.link import watching
+from robot.link import holders
 from robot.link.topicwatch import LocalWatches, TopicRefused
 from robot.link.watching import echo_key, watches_of
 from tests.helpers import async_wait_until, receive_frame, receive_until, ws_communicator
@@ -71,7 +71,7 @@ async def test_registry_and_recorded_topics_stay_subscribed_when_nobody_watches(
 
 async def test_a_dead_web_process_lease_runs_out(link, sim, settings, monkeypatch):
     settings.TOPICS_IDLE_GRACE_S = 0
-    monkeypatch.setattr(watching, "WATCH_LEASE_S", 0.5)
+    monkeypatch.setattr(holders, "LEASE_S", 0.5)
     reply = await link.execute({"op": "topics_watch", "holder": "gone-process", "topics": [TF]})
     assert reply == {"ok": True, "refused": {}}
     await async_wait_until(lambda: sim.subscription_count(TF) == 1, timeout=10, what="subscribed")
@@ -88,7 +88,7 @@ async def test_watches_from_several_web_processes_are_counted_at_the_link(link, 
         await second.watch("page-b", TF)
         await second.watch("page-c", TF)
         await async_wait_until(lambda: sim.subscription_count(TF) == 1, timeout=10, what="subscribed")
-        assert set(watches_of(link).leases[TF]) == {first.holder, second.holder}
+        assert watches_of(link).leases.holders(TF) == {first.holder, second.holder}
         await first.drop("page-a")
         await second.unwatch("page-b", TF)
         await asyncio.sleep(0.3)
