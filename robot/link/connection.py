@@ -98,8 +98,7 @@ class RobotLink(Serving):
                 log.warning("robot link request loop did not stop in time")
         await self._inflight.wait(2)  # answer what it took while the robot is there
         if self._coalescer is not None:
-            self._coalescer.close()  # ends its sender
-            self._tasks.append(self._coalescer._task)
+            self._tasks.append(self._coalescer.close())
         await asyncio.gather(cancel_and_wait(self._tasks, 2), self._inflight.close(2))
         self._tasks.clear()
         if self.guard is not None:

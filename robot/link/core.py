@@ -95,6 +95,11 @@ class LinkCore:
         by = str(self._latch_msg.get("by") or self._pressed_by or "")
         return by, float(self._pressed_at or self._latch_msg.get("at") or now)
 
+    def keep(self, task: asyncio.Task) -> asyncio.Task:
+        """A feature's long-running task that ends with this link (cancelled at its stop)."""
+        self._tasks.append(task)
+        return task
+
     def _spawn(self, coro: Any) -> None:
         self._inflight.start(coro)
 

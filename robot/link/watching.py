@@ -83,7 +83,7 @@ class Watches:
         assert link.loop is not None
         self.coalescer = Coalescer(self._send, loop=link.loop)
         link.listeners.append(self.offer)
-        link._tasks.append(supervise("link.topic-watch", self._sweep_forever))
+        link.keep(supervise("link.topic-watch", self._sweep_forever))
 
     # --- leases ----------------------------------------------------------------------
 

@@ -103,9 +103,11 @@ class Coalescer:
                 except Exception:
                     log.exception("fan-out send failed")
 
-    def close(self) -> None:
+    def close(self) -> asyncio.Task:
+        """Stop: the sender's task, cancelled (to await its end)."""
         self._closed = True
         self._wake.set()
         self._task.cancel()
         for timer in self._timers.values():
             timer.cancel()
+        return self._task
