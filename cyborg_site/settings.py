@@ -346,17 +346,12 @@ AUDIO_TALK_LOCK_TTL_S = env_float("AUDIO_TALK_LOCK_TTL_S", 3.0, minimum=0.5)
 # --- History ---------------------------------------------------------------------------
 HISTORY_DEFAULT_INTERVAL_S = env_float("HISTORY_DEFAULT_INTERVAL_S", 5.0, minimum=0.1)
 HISTORY_MAX_MESSAGE_BYTES = env_int("HISTORY_MAX_MESSAGE_BYTES", 256 * 1024, minimum=1)
-# The recorder writes every-message topics at most this long after they arrive, in batches.
+# The recorder writes what it keeps at most this long after it arrives, in batches.
 HISTORY_FLUSH_S = env_float("HISTORY_FLUSH_S", 0.5, minimum=0.01)
 HISTORY_BATCH_ROWS = env_int("HISTORY_BATCH_ROWS", 5000, minimum=1)
 # Messages waiting for the database beyond this are dropped (and counted, loudly).
 HISTORY_BUFFER_ROWS = env_int("HISTORY_BUFFER_ROWS", 200_000, minimum=1)
-# "thread": the link process writes batches itself; "celery": batches go to the worker (needs REDIS_URL).
-HISTORY_BATCH_WRITER = env_choice("HISTORY_BATCH_WRITER", "thread", ("thread", "celery"))
 HISTORY_POLICY_RELOAD_S = env_float("HISTORY_POLICY_RELOAD_S", 1.0, minimum=0.05)
-HISTORY_SAMPLE_TICK_S = env_float("HISTORY_SAMPLE_TICK_S", 1.0, minimum=0.05)
-# Periodic samples kept per topic for a sampler that was down (a Celery worker outage) to catch up on.
-HISTORY_BACKLOG_SAMPLES = env_int("HISTORY_BACKLOG_SAMPLES", 2000, minimum=1)
 HISTORY_PRUNE_EVERY_S = env_float("HISTORY_PRUNE_EVERY_S", 300.0, minimum=1)
 HISTORY_MAX_POINTS = env_int("HISTORY_MAX_POINTS", 2000, minimum=10)
 # Replay and incidents: camera frames are JPEG files under CAMERA_RECORD_DIR (rows in the database index them).
@@ -376,8 +371,7 @@ LINK_DOWN_ALERT_S = env_float("LINK_DOWN_ALERT_S", 30.0, minimum=0)
 # Each beat job expires just before its next run is due.
 CELERY_BEAT_SCHEDULE = {
     name: {"task": task, "schedule": every_s, "options": {"expires": every_s * 0.9}}
-    for name, task, every_s in (("history-sample", "history.sample", HISTORY_SAMPLE_TICK_S),
-                                ("history-prune", "history.prune", HISTORY_PRUNE_EVERY_S),
+    for name, task, every_s in (("history-prune", "history.prune", HISTORY_PRUNE_EVERY_S),
                                 ("alerts-link-watch", "alerts.check_links", LINK_WATCH_EVERY_S))
 }
 

@@ -9,11 +9,11 @@ class HistoryConfig(AppConfig):
         from history.blackbox import run_blackbox
         from history.camerarec import run_camera_recorder
         from history.recorder import run_recorder
-        from history.sampling import run_schedule
+        from history.retention import run_pruning
         from robot.link.hosting import register_background
 
-        # The recorder runs wherever the link runs; with REDIS_URL, Celery beat samples instead.
+        # The recorder (history's one way in) runs wherever the link runs; with REDIS_URL, Celery beat prunes.
         register_background("history-recorder", run_recorder)
-        register_background("history-schedule", run_schedule, embedded_only=True)
+        register_background("history-pruning", run_pruning, embedded_only=True)
         register_background("history-camera", run_camera_recorder)
         register_background("history-blackbox", run_blackbox)

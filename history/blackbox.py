@@ -1,19 +1,15 @@
-"""The black box: the last minute of the chosen topics in memory, kept in full around incidents.
+"""The black box: incidents around the moments that matter, kept in full by the recorder.
 
-``offer`` (a link listener, on the event-loop thread) appends every message of the black
-box's topics to a ring of the last ``INCIDENT_BEFORE_S`` seconds, checks it for a trigger,
-and queues it for storage when it falls in an open incident's window. The loop opens an
-incident for each trigger and for an E-STOP seen in the shared latch, adopts the incidents
-other processes opened (a marked moment), writes the ring's part of each new window and the
-messages since, and hands the camera recorder the same windows.
+``offer`` (a link listener, on the event-loop thread) checks the black box's topics for a
+trigger. The loop opens an incident for each trigger and for an E-STOP seen in the shared
+latch, adopts the incidents other processes opened (a marked moment), and has the recorder
+hold each window: the recorder keeps every message of the black box's topics an admin records
+every N seconds (and every camera frame) in it, those of the seconds before from its ring.
+Topics recorded every message are stored anyway; a topic the admin switched off stays
+unrecorded, incident or not.
 
-What it writes: every message of the topics an admin records every N seconds (the default
-policies cover all of ``TOPIC_KEYS``), so inside an incident they are at full rate. Topics
-recorded every message are already stored by the recorder; a topic the admin switched off
-stays unrecorded, incident or not.
-
-A restart loses the ring (the minute before an incident still open then), never what was
-queued: a clean stop writes it.
+A restart loses the recorder's ring (the minute before an incident still open then), never what
+it took: a clean stop writes it.
 """
 
 from __future__ import annotations
@@ -21,38 +17,31 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Callable, Sequence
 from typing import Any
 
 from django.conf import settings
 
-from history.camerarec import CameraRecorder
-from history.capture import Capture
-from history.incidents import Triggers, incident_open, incidents_to_capture
+from history.incidents import BLACKBOX_KEYS, Triggers, incident_open, incidents_to_capture
 from history.models import Incident
 from history.recorder import Recorder
-from history.storage import FailureLog, Pending, Row, encode, in_thread, write_rows
+from history.storage import FailureLog, in_thread
 from robot import interface as ri
 from robot.live.keys import LATCH_KEY
 from robot.supervisor import holding, running
 
 log = logging.getLogger(__name__)
 
-TOPIC_KEYS = (
-    "robot_pose", "odom", "amcl_pose", "plan", "move_base_status", "state_change", "robot_mode",
-    "emotional_state", "battery_soc", "bumper_state", "motors_state", "diagnostics", "rosout",
-)
 TICK_S = 0.25
 ADOPT_EVERY_S = 1.0
 LINK_HOLDER = "blackbox"
 
 
-class BlackBox(Capture[Pending]):
-    def __init__(self, *, writer: Callable[[Sequence[Row]], int] = write_rows) -> None:
-        super().__init__(writer, "writing incident messages")
-        self.topics = {ri.topic(key).name: ri.topic(key).type for key in TOPIC_KEYS}
+class BlackBox:
+    def __init__(self) -> None:
+        self.topics = {ri.topic(key).name: ri.topic(key).type for key in BLACKBOX_KEYS}
         self.triggers = Triggers()
         self.fired: list[tuple[str, float, str, str]] = []  # (kind, t, summary, by)
+        self.received = 0
         self._latch_at: float | None = None
 
     # --- on the event-loop thread: never blocks --------------------------------------
@@ -60,28 +49,15 @@ class BlackBox(Capture[Pending]):
     def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if name not in self.topics:
             return
-        entry = self._remember(t, (name, msg_type, msg))
-        if self._incident_at(t) is not None:
-            self._keep(entry)
+        self.received += 1
         fired = self.triggers.check(name, msg)
         if fired is not None:
             self.fired.append((fired[0], t, fired[1], ""))
 
-    def _keep(self, entry: list[Any]) -> None:
-        entry[2] = True
-        t, (name, msg_type, msg), _ = entry
-        # The topics recorded every N seconds are those an incident keeps every message of.
-        if (recording := running(Recorder)) is not None and name in recording.periodic:
-            self._pending.append((name, msg_type, msg, t))
-
     def adopt(self, incident: Incident) -> None:
-        if incident.pk in self.windows:
-            return
-        self.windows[incident.pk] = (incident.start, incident.end)
-        for entry in self._unkept(incident.start, incident.end):
-            self._keep(entry)
-        if (camera := running(CameraRecorder)) is not None:
-            camera.hold(incident.pk, incident.start, incident.end)
+        recorder = running(Recorder)
+        if recorder is not None and incident.pk not in recorder.windows:
+            recorder.hold(incident.pk, incident.start, incident.end)
 
     # --- the loop ---------------------------------------------------------------------
 
@@ -105,13 +81,8 @@ class BlackBox(Capture[Pending]):
     async def adopt_open(self) -> None:
         for incident in await in_thread(incidents_to_capture):
             self.adopt(incident)
-        past = time.time() - settings.HISTORY_FLUSH_S
-        self.release_past(past)
-        if (camera := running(CameraRecorder)) is not None:
-            camera.release_past(past)
-
-    def _batch(self, pending: list[Pending]) -> list[Row]:
-        return encode(pending, {}, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)[0]
+        if (recorder := running(Recorder)) is not None:
+            recorder.release_past(time.time() - settings.HISTORY_FLUSH_S)
 
     async def run(self, link: Any) -> None:
         if self.offer not in link.listeners:
@@ -128,7 +99,6 @@ class BlackBox(Capture[Pending]):
                         for name, msg_type in self.topics.items():
                             link.subscribe(name, msg_type, holder=LINK_HOLDER)  # again each second: a no-op once held
                         await self.adopt_open()
-                    await self.flush()
                     failures.ok()
                 except Exception:
                     failures.failed()
@@ -138,7 +108,6 @@ class BlackBox(Capture[Pending]):
                 link.listeners.remove(self.offer)
             for name in self.topics:
                 link.unsubscribe(name, holder=LINK_HOLDER)
-            await self.flush()
 
 
 async def run_blackbox(link: Any) -> None:

@@ -1,10 +1,8 @@
-"""The camera recorder: one MJPEG stream from the video server at the recording size.
+"""The camera's way into history: one MJPEG stream from the video server at the recording size.
 
-Every frame goes into a ring of the last ``INCIDENT_BEFORE_S`` seconds; one every
-1 / ``CAMERA_RECORD_FPS`` seconds is kept for replay, and every frame inside an incident's
-window (``hold``) is kept for the incident, including those already in the ring when the
-incident began. Frames are written from a worker thread every ``HISTORY_FLUSH_S``; a clean
-stop writes what it took. It runs wherever the link runs (a background service).
+Every frame is offered to the recorder (``Recorder.offer_frame``), which keeps one every
+1 / ``CAMERA_RECORD_FPS`` seconds for replay and every frame inside an incident's window, and
+writes them with the messages. It runs wherever the link runs (a background service).
 
 It reads the video server itself, not through the dashboard's relay (history sits below the
 dashboard): the recording size is one more encoder on the robot's video server, however many
@@ -16,16 +14,15 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import aiohttp
 from django.conf import settings
 
-from history.capture import Capture
-from history.frames import Frame, write_frames
+from history.recorder import Recorder
 from history.storage import FailureLog
-from robot.supervisor import holding
+from robot.supervisor import holding, running
 
 log = logging.getLogger(__name__)
 
@@ -35,48 +32,19 @@ CONNECT_TIMEOUT_S = 3.0
 READ_TIMEOUT_S = 10.0
 
 
-class CameraRecorder(Capture[Frame]):
-    def __init__(self, *, writer: Callable[[Sequence[Frame]], int] = write_frames, fps: float | None = None,
-                 robot_connected: Callable[[], bool] = lambda: True) -> None:
-        super().__init__(writer, "writing camera frames")
+class CameraRecorder:
+    def __init__(self, *, robot_connected: Callable[[], bool] = lambda: True) -> None:
         self.robot_connected = robot_connected  # no robot, no camera to read: nothing is asked of it
-        self.fps = settings.CAMERA_RECORD_FPS if fps is None else fps
-        self._last_kept = 0.0
+        self.received = self.lost = 0
 
     def offer(self, t: float, jpeg: bytes) -> None:
-        entry = self._remember(t, jpeg)
-        incident = self._incident_at(t)
-        if incident is not None:
-            self._keep(entry, incident)
-        elif self.fps > 0 and t - self._last_kept >= 1.0 / self.fps * 0.95:
-            self._keep(entry, None)
+        self.received += 1
+        if (recorder := running(Recorder)) is None:
+            self.lost += 1
+            return
+        recorder.offer_frame(t, jpeg)
 
-    def _keep(self, entry: list[Any], incident: int | None) -> None:
-        entry[2] = True
-        if incident is None:
-            self._last_kept = entry[0]
-        self._pending.append((entry[0], entry[1], incident))
-
-    def hold(self, incident: int, start: float, end: float) -> None:
-        """Keep every frame in [start, end] for ``incident``: those in the ring now and those to come."""
-        self.windows[incident] = (start, end)
-        for entry in self._unkept(start, end):
-            self._keep(entry, incident)
-
-    def _batch(self, pending: list[Frame]) -> list[Frame]:
-        return sorted(pending, key=lambda f: f[0])
-
-    async def run(self) -> None:
-        try:
-            async with asyncio.TaskGroup() as group:
-                group.create_task(self._pump_forever())
-                while True:
-                    await asyncio.sleep(settings.HISTORY_FLUSH_S)
-                    await self.flush()
-        finally:
-            await self.flush()  # a clean stop loses nothing it took
-
-    async def _pump_forever(self) -> None:
+    async def pump_forever(self) -> None:
         failures = FailureLog("reading the camera for recording")
         while True:
             if self.robot_connected():
@@ -110,8 +78,7 @@ class CameraRecorder(Capture[Frame]):
 
 async def run_camera_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
-    camera = CameraRecorder(robot_connected=lambda: bool(link.connected))
-    if camera.fps <= 0:
+    if settings.CAMERA_RECORD_FPS <= 0:
         await asyncio.Event().wait()  # recording is off: idle until cancelled
-    with holding(camera):
-        await camera.run()
+    with holding(CameraRecorder(robot_connected=lambda: bool(link.connected))) as camera:
+        await camera.pump_forever()

@@ -13,6 +13,12 @@ from history.storage import utc
 from robot import interface as ri
 from robot.models import AuditEntry
 
+# The black box's topics: those the triggers read, and those an incident keeps every message of
+# (when the admin records them every N seconds; the default policies cover them all).
+BLACKBOX_KEYS = (
+    "robot_pose", "odom", "amcl_pose", "plan", "move_base_status", "state_change", "robot_mode",
+    "emotional_state", "battery_soc", "bumper_state", "motors_state", "diagnostics", "rosout",
+)
 MAX_TRIGGERS = 50
 DRIVE_ACTIONS = ("teleop.lock", "teleop.takeover", "teleop.unlock", "estop")
 

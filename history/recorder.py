@@ -1,13 +1,18 @@
-"""The recorder: every message of every-message topics, written in batches off the event loop.
+"""The recorder: history's one way in, where the link runs.
 
-``offer`` is a link listener: it runs on the event-loop thread for every message, so it
-only appends to a bounded buffer. ``run`` (a background service where the link runs)
-swaps the buffer out every ``HISTORY_FLUSH_S`` (or sooner when a batch is full) and
-writes it from a worker thread. It also reloads the policies, subscribes the link to the
-topics they name, and keeps the latest message of each periodic topic in the
-latest-state store for the sampler (Celery beat or the embedded loop), with a bounded
-backlog of one message per interval: a sampler that was down (a Celery worker outage)
-stores those when it returns instead of losing them.
+``offer`` is a link listener: it runs on the event-loop thread for every message and judges
+each once: its topic records every message, or it is due (its topic's interval has passed
+since the last one kept), or it falls in an open incident's window. What is kept goes into
+the one buffer. The camera's frames come in the same way (``offer_frame``): one every
+1 / ``CAMERA_RECORD_FPS`` seconds, or every frame inside an incident's window. What is not
+kept of the black box's topics and of the camera waits in a ring of the last
+``INCIDENT_BEFORE_S`` seconds, so an incident opened a moment later (``hold``) keeps the
+seconds before it at full rate.
+
+``run`` (a background service where the link runs) swaps the buffer out every
+``HISTORY_FLUSH_S`` (or sooner when a batch is full) and writes it from a worker thread with
+the one writer (``storage.write_batch``: samples with their rollups, frames as files). It also
+reloads the policies and subscribes the link to the topics they name.
 """
 
 from __future__ import annotations
@@ -15,21 +20,24 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, TypeGuard
 
 from django.conf import settings
 
+from history.frames import Frame
+from history.incidents import BLACKBOX_KEYS
 from history.models import Mode
 from history.policies import Policy, load_policies
-from history.sampling import is_due, latest_key
 from history.sessions import SessionNotes
-from history.storage import FailureLog, Pending, Row, encode, write_rows
+from history.storage import FailureLog, Item, Pending, Taken, encode, write_batch
+from robot import interface as ri
 from robot.supervisor import holding
 
 log = logging.getLogger(__name__)
 
-Writer = Callable[[Sequence[Row]], int]
+Writer = Callable[[Sequence[Item]], int]
 
 # The latest-state store key where the recorder leaves, per every-message topic, the last message it
 # wrote (receive time and header.seq) and the topic's rate, with the running count of messages lost
@@ -39,6 +47,14 @@ Writer = Callable[[Sequence[Row]], int]
 WATERMARK_KEY = "_recorder"
 # The recorder's hold on the link's upstream subscriptions (others may hold the same topics).
 LINK_HOLDER = "recorder"
+# Where the camera's frames are "due" in the recorder's bookkeeping (not a ROS topic).
+CAMERA = "camera"
+
+
+def is_due(t: float, last: float, interval_s: float) -> bool:
+    # Messages arrive with jitter; without a little slack a 5 s topic sampled every 5 s skips periods.
+    slack = min(0.25, interval_s * 0.1)
+    return t > last and t - last >= interval_s - slack
 
 
 def header_seq(msg: dict[str, Any]) -> int | None:
@@ -58,11 +74,15 @@ def messages_between(previous: list[Any], t: float, seq: int | None) -> int | No
     return max(0, round((t - last_t) * rate_hz) - 1)
 
 
+def _is_frame(item: Taken) -> TypeGuard[Frame]:
+    return len(item) == 3
+
+
 class Recorder:
     def __init__(
         self,
         *,
-        writer: Writer = write_rows,
+        writer: Writer = write_batch,
         flush_s: float | None = None,
         batch_rows: int | None = None,
         buffer_rows: int | None = None,
@@ -75,15 +95,16 @@ class Recorder:
         self.limits: dict[str, int] = {}
         self.every: frozenset[str] = frozenset()
         self.periodic: frozenset[str] = frozenset()
-        self.latest: dict[str, dict[str, Any]] = {}
-        self.backlog: list[dict[str, Any]] = []
-        self._backlog_t: dict[str, float] = {}
-        self._buffer: list[Pending] = []
+        self.blackbox_topics = frozenset(ri.topic(key).name for key in BLACKBOX_KEYS)
+        self._last_due: dict[str, float] = {}
+        self.ring: deque[tuple[float, Taken]] = deque()  # what the black box may still want, oldest first
+        self.windows: dict[int, tuple[float, float]] = {}  # incident id -> (start, end)
+        self._buffer: list[Taken] = []
         self._full: asyncio.Event | None = None
         self._subscribed_by_us: set[str] = set()
         self._reload_log = FailureLog("loading recording policies")
         self._write_log = FailureLog("writing recorded messages")
-        self._retry: list[Row] = []
+        self._retry: list[Item] = []
         self.received = self.stored = self.dropped = self.oversize = 0
         # Every-message topics: [first t, last t, messages] taken here; (t, seq) of the last one written;
         # the previous recorder's [last t, rate, last seq].
@@ -105,21 +126,56 @@ class Recorder:
                 self._count_gap(name, t, header_seq(msg))
             else:
                 seen[1], seen[2] = t, seen[2] + 1
-            if len(self._buffer) >= self.buffer_rows:
-                self.dropped += 1
-                if self.dropped == 1 or self.dropped % 1000 == 0:
-                    log.error("history: buffer full (%d rows); dropped %d messages so far (last on %s)",
-                              self.buffer_rows, self.dropped, name)
-                return
-            self._buffer.append((name, msg_type, msg, t))
-            if len(self._buffer) >= self.batch_rows and self._full is not None:
-                self._full.set()
+            self._keep((name, msg_type, msg, t))
         elif name in self.periodic:
-            entry = {"key": latest_key(name), "topic": name, "msg_type": msg_type, "msg": msg, "t": t}
-            self.latest[name] = entry
-            if is_due(t, self._backlog_t.get(name, 0.0), self.policies[name].interval_s):
-                self._backlog_t[name] = t
-                self.backlog.append(entry)
+            self.received += 1
+            # The topics recorded every N seconds are those an incident keeps every message of.
+            self._judge(name, (name, msg_type, msg, t), t, self.policies[name].interval_s,
+                        name in self.blackbox_topics)
+
+    def offer_frame(self, t: float, jpeg: bytes) -> None:
+        """A camera frame (receive time on the server's clock, like every recorded message)."""
+        fps = settings.CAMERA_RECORD_FPS
+        self._judge(CAMERA, (t, jpeg, None), t, 1.0 / fps * 0.95 if fps > 0 else None, True)
+
+    def _judge(self, name: str, item: Taken, t: float, interval_s: float | None, ringed: bool) -> None:
+        if ringed and (incident := self._incident_at(t)) is not None:
+            self._keep(_for_incident(item, incident))
+        elif interval_s is not None and is_due(t, self._last_due.get(name, 0.0), interval_s):
+            self._last_due[name] = t
+            self._keep(item)
+        elif ringed:
+            self.ring.append((t, item))
+            horizon = t - settings.INCIDENT_BEFORE_S - 5.0
+            while self.ring and self.ring[0][0] < horizon:
+                self.ring.popleft()
+
+    def _keep(self, item: Taken) -> None:
+        if len(self._buffer) >= self.buffer_rows:
+            self.dropped += 1
+            if self.dropped == 1 or self.dropped % 1000 == 0:
+                log.error("history: buffer full (%d rows); dropped %d so far (last on %s)",
+                          self.buffer_rows, self.dropped, CAMERA if _is_frame(item) else item[0])
+            return
+        self._buffer.append(item)
+        if len(self._buffer) >= self.batch_rows and self._full is not None:
+            self._full.set()
+
+    def _incident_at(self, t: float) -> int | None:
+        return next((i for i, (start, end) in self.windows.items() if start <= t <= end), None)
+
+    def hold(self, incident: int, start: float, end: float) -> None:
+        """Keep everything in [start, end] for ``incident``: what the ring holds now and what comes."""
+        self.windows[incident] = (start, end)
+        ring, self.ring = self.ring, deque()
+        for t, item in ring:
+            if start <= t <= end:
+                self._keep(_for_incident(item, incident))
+            else:
+                self.ring.append((t, item))
+
+    def release_past(self, now: float) -> None:
+        self.windows = {incident: window for incident, window in self.windows.items() if window[1] >= now}
 
     def _count_gap(self, name: str, t: float, seq: int | None) -> None:
         previous = self._previous.pop(name, None)
@@ -156,31 +212,38 @@ class Recorder:
         self.limits = {p.topic: p.max_bytes for p in policies.values()}
         self.every = frozenset(p.topic for p in policies.values() if p.mode == Mode.EVERY)
         self.periodic = frozenset(p.topic for p in policies.values() if p.mode == Mode.PERIODIC)
-        for name in set(self.latest) - self.periodic:
-            self.latest.pop(name, None)
-            self._backlog_t.pop(name, None)
+        for name in set(self._last_due) - self.periodic - {CAMERA}:
+            self._last_due.pop(name, None)
 
     # --- flushing ---------------------------------------------------------------------
 
-    def take(self) -> list[Pending]:
+    def take(self) -> list[Taken]:
         pending, self._buffer = self._buffer, []
         return pending
 
-    def flush_sync(self, pending: Sequence[Pending]) -> int:
-        rows, oversize = encode(pending, self.limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
+    def flush_sync(self, pending: Sequence[Taken]) -> int:
+        frames: list[Item] = []
+        messages: list[Pending] = []
+        for item in pending:
+            if len(item) == 3:  # a frame
+                frames.append(item)
+            else:
+                messages.append(item)
+        rows, oversize = encode(messages, self.limits, default_max=settings.HISTORY_MAX_MESSAGE_BYTES)
         self.oversize += oversize
-        rows, self._retry = self._retry + rows, []
-        for start in range(0, len(rows), self.batch_rows):
+        batch: list[Item] = [*self._retry, *rows, *frames]
+        self._retry = []
+        for start in range(0, len(batch), self.batch_rows):
             try:
-                self.stored += self.writer(rows[start:start + self.batch_rows])
+                self.stored += self.writer(batch[start:start + self.batch_rows])
             except Exception:
                 # Keep what was not written for the next flush, within the same memory bound.
-                self._retry = rows[start:start + self.buffer_rows]
-                self.dropped += len(rows) - start - len(self._retry)
+                self._retry = batch[start:start + self.buffer_rows]
+                self.dropped += len(batch) - start - len(self._retry)
                 raise
-        marks = {name: (t, header_seq(msg)) for name, _, msg, t in pending}  # the last of each topic wins
+        marks = {name: (t, header_seq(msg)) for name, _, msg, t in messages}  # the last of each topic wins
         self._written = {**self._written, **marks}  # rebound, never mutated: the loop thread reads it
-        return len(rows)
+        return len(batch)
 
     async def flush(self) -> int:
         pending = self.take()
@@ -189,7 +252,7 @@ class Recorder:
         return await self._write_log.attempt(self.flush_sync, pending) or 0
 
     async def run(self, link: Any) -> None:
-        """Background service: reload policies, keep subscriptions, flush batches, publish latest."""
+        """Background service: reload policies, keep subscriptions, flush batches, leave the watermark."""
         self._full = asyncio.Event()
         await self.resume_after(link.store)
         if self.offer not in link.listeners:
@@ -209,13 +272,13 @@ class Recorder:
                     self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since,
                                                            now=time.time()))
                 await self.flush()
-                await self.publish_latest(link.store)
+                await self.publish_watermark(link.store)
         finally:
             if self.offer in link.listeners:
                 link.listeners.remove(self.offer)
             await self.flush()  # a clean stop (SIGTERM, lease handed over) loses nothing it took
             try:
-                await self.publish_latest(link.store)
+                await self.publish_watermark(link.store)
             except Exception:
                 log.warning("history: could not leave the recorder's watermark on stopping", exc_info=True)
 
@@ -232,15 +295,14 @@ class Recorder:
             link.unsubscribe(name, holder=LINK_HOLDER)
             self._subscribed_by_us.discard(name)
 
-    async def publish_latest(self, store: Any) -> None:
-        latest, self.latest = self.latest, {}
-        backlog, self.backlog = self.backlog, []
-        for entry in latest.values():
-            await store.aput(entry["key"], entry)
-        for entry in backlog:
-            await store.aappend_recent(entry["key"], entry, settings.HISTORY_BACKLOG_SAMPLES)
+    async def publish_watermark(self, store: Any) -> None:
         if self._written or self.lost_total:
             await store.aput(WATERMARK_KEY, self.watermark())
+
+
+def _for_incident(item: Taken, incident: int) -> Taken:
+    """A frame kept for an incident carries its id; a message is kept as it is."""
+    return (item[0], item[1], incident) if _is_frame(item) else item
 
 
 def losses(watermark: dict[str, Any] | None) -> dict[str, int]:
@@ -250,8 +312,5 @@ def losses(watermark: dict[str, Any] | None) -> dict[str, int]:
 
 async def run_recorder(link: Any) -> None:
     """The background service registered in ``HistoryConfig.ready``."""
-    from history.tasks import celery_writer_for
-
-    writer = celery_writer_for() if settings.HISTORY_BATCH_WRITER == "celery" else write_rows
-    with holding(Recorder(writer=writer)) as made:
+    with holding(Recorder()) as made:
         await made.run(link)

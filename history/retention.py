@@ -4,14 +4,17 @@ What lies inside an incident's window is kept until an admin releases the incide
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import time
+from typing import Any
 
+from django.conf import settings
 from django.db import transaction
 
 from history.frames import held_windows, outside, prune_frames
 from history.models import Sample, TopicPolicy
-from history.storage import samples_deleted, utc
+from history.storage import FailureLog, in_thread, samples_deleted, utc
 
 log = logging.getLogger(__name__)
 
@@ -33,3 +36,15 @@ def prune_expired(*, now: float | None = None) -> int:
                 log.info("history: pruned %d samples of %s older than %g s", count, topic, retention_s)
         deleted += count
     return deleted + prune_frames(now=now)
+
+
+async def run_pruning(link: Any) -> None:
+    """Embedded default: the beat schedule's pruning inside the server process."""
+    failures = FailureLog("pruning expired history")
+    while True:
+        try:
+            await in_thread(prune_expired)
+            failures.ok()
+        except Exception:
+            failures.failed()
+        await asyncio.sleep(settings.HISTORY_PRUNE_EVERY_S)

@@ -1,4 +1,4 @@
-"""Write recorded rows fast with their rollups, and keep the downsampling cache honest about late rows.
+"""The one writer: recorded rows fast with their rollups, and camera frames, in one transaction.
 
 Plain ``bulk_create`` tops out near 10,000 rows/s; the recorder must sustain more, so rows
 (already JSON text) go in with one ``executemany`` on SQLite and ``COPY`` on PostgreSQL.
@@ -22,6 +22,7 @@ from django.db import close_old_connections, connection, transaction
 from django.db.models import BigIntegerField, ExpressionWrapper, F
 
 from cyborg_site.text import scrub
+from history.frames import Frame, write_frames
 from history.models import Rollup, Sample, SeriesBucket
 from history.rollup import LEVELS_S, Aggregates, aggregate
 from robot.live.state import jsonable
@@ -34,6 +35,9 @@ log = logging.getLogger(__name__)
 Row = tuple[str, str, float, str] | tuple[str, str, float, str, Any]
 # The same with the message still a dict.
 Pending = tuple[str, str, dict[str, Any], float]
+# What the recorder's one buffer holds (messages and camera frames), and what its writer is given.
+Taken = Pending | Frame
+Item = Row | Frame
 
 # Buckets newer than this may still get rows (batches in flight, periodic samples); never cached.
 SETTLE_S = 10.0
@@ -119,6 +123,19 @@ def encode(pending: Sequence[Pending], limits: dict[str, int], *, default_max: i
             continue
         rows.append((topic, msg_type, t, text, msg))
     return rows, oversize
+
+
+def write_batch(items: Sequence[Item]) -> int:
+    """The recorder's writer: its messages (as rows) and frames in one transaction; returns how many."""
+    frames: list[Frame] = []
+    rows: list[Row] = []
+    for item in items:
+        if len(item) == 3:
+            frames.append(item)
+        else:
+            rows.append(item)
+    with transaction.atomic():
+        return write_frames(sorted(frames, key=lambda frame: frame[0])) + write_rows(rows)
 
 
 def write_rows(rows: Sequence[Row]) -> int:

@@ -1,4 +1,4 @@
-"""History fixtures: a fast recorder/schedule, a burst topic, a real Celery worker on Redis."""
+"""History fixtures: a fast recorder, a burst topic, a real Celery worker on Redis."""
 
 from __future__ import annotations
 
@@ -16,7 +16,6 @@ CELERY_REDIS = "redis://127.0.0.1:6379/14"
 def fast_history(settings):
     settings.HISTORY_FLUSH_S = 0.05
     settings.HISTORY_POLICY_RELOAD_S = 0.05
-    settings.HISTORY_SAMPLE_TICK_S = 0.05
     return settings
 
 
@@ -46,14 +45,13 @@ def celery_worker_thread(celery_app, transactional_db):
 
 @pytest.fixture
 async def recording(fast_history, link):
-    """The link with history's two background services running, as ``start_link`` runs them embedded."""
+    """The link with history's recorder running, as ``start_link`` runs it."""
     import asyncio
 
     from history.recorder import Recorder, run_recorder
-    from history.sampling import run_schedule
     from robot.supervisor import running
 
-    tasks = [asyncio.ensure_future(run_recorder(link)), asyncio.ensure_future(run_schedule(link))]
+    tasks = [asyncio.ensure_future(run_recorder(link))]
     await asyncio.sleep(0)
     made = running(Recorder)
     assert made is not None

@@ -1,75 +1,39 @@
-"""A stopped sampler (a Celery worker outage) stores every period it missed when it runs again."""
+"""Periodic topics are sampled where the link hears them: a Celery worker outage loses no period;
+a recorder taking over counts the messages that fell between it and the previous one."""
 
 import time
 
 import pytest
 from asgiref.sync import async_to_sync
-from django.test import override_settings
 
 from history.models import Mode, Sample
 from history.policies import load_policies, policy_upsert
 from history.recorder import Recorder
-from history.sampling import sample_periodic
 from robot.live.state import get_store
-from tests.helpers import wait_until
 
 PERIODIC = "/history_test/catchup"
 TYPE = "std_msgs/Float32"
-
-
-def _record(rec: Recorder, start: float, seconds: float, hz: float = 4) -> None:
-    """Messages at ``hz`` for ``seconds`` of robot time, handed to the store as the link's recorder does."""
-    for i in range(int(seconds * hz)):
-        rec.offer(PERIODIC, TYPE, {"data": float(i)}, start + i / hz)
-        if i % 5 == 4:
-            async_to_sync(rec.publish_latest)(get_store())
-    async_to_sync(rec.publish_latest)(get_store())
 
 
 def _sampled_times() -> list[float]:
     return sorted(s.received_at.timestamp() for s in Sample.objects.filter(topic=PERIODIC))
 
 
-def test_a_sampler_that_was_down_stores_one_sample_per_missed_interval(db):
+def test_periodic_topics_keep_one_sample_per_interval_with_no_worker_running(db):
     policy_upsert(topic=PERIODIC, msg_type=TYPE, mode=Mode.PERIODIC, interval_s=1)
     rec = Recorder()
     rec.apply(load_policies())
     start = time.time() - 30
 
-    _record(rec, start, 20)  # twenty intervals with no sampler running
-    stored = sample_periodic()
+    for i in range(20 * 4):  # twenty intervals at 4 Hz, no Celery worker anywhere
+        rec.offer(PERIODIC, TYPE, {"data": float(i)}, start + i / 4)
+        if i % 5 == 4:
+            rec.flush_sync(rec.take())
+    rec.flush_sync(rec.take())
 
-    assert stored == 20
-    times = _sampled_times()
-    assert [round(t - start, 1) for t in times] == [float(i) for i in range(20)]
-    assert sample_periodic() == 0  # nothing stored twice
-
-
-def test_the_backlog_is_bounded_and_keeps_the_newest(db):
-    policy_upsert(topic=PERIODIC, msg_type=TYPE, mode=Mode.PERIODIC, interval_s=1)
-    rec = Recorder()
-    rec.apply(load_policies())
-    start = time.time() - 30
-
-    with override_settings(HISTORY_BACKLOG_SAMPLES=5):
-        _record(rec, start, 12)
-    assert sample_periodic() == 5
-    assert [round(t - start, 1) for t in _sampled_times()] == [7.0, 8.0, 9.0, 10.0, 11.0]
-
-
-def test_a_real_worker_back_from_an_outage_catches_up(celery_app, transactional_db):
-    from celery.contrib.testing.worker import start_worker
-
-    policy_upsert(topic=PERIODIC, msg_type=TYPE, mode=Mode.PERIODIC, interval_s=1)
-    rec = Recorder()
-    rec.apply(load_policies())
-    start = time.time() - 30
-    _record(rec, start, 10)  # the worker is down: beat's sample tasks expire unconsumed
-
-    with start_worker(celery_app, pool="solo", perform_ping_check=False, shutdown_timeout=10):
-        celery_app.send_task("history.sample")
-        wait_until(lambda: Sample.objects.filter(topic=PERIODIC).count() == 10, timeout=20,
-                   what="ten samples after the outage")
+    assert [round(t - start, 1) for t in _sampled_times()] == [float(i) for i in range(20)]
+    rec.offer(PERIODIC, TYPE, {"data": 0.0}, start + 19.75)  # the same moment again: nothing stored twice
+    assert rec.flush_sync(rec.take()) == 0
 
 
 def test_a_recorder_taking_over_counts_the_messages_missed_since_the_previous_one(db):
@@ -83,7 +47,7 @@ def test_a_recorder_taking_over_counts_the_messages_missed_since_the_previous_on
     for i in range(40):  # 2 s at 20 Hz, written
         first.offer(PERIODIC, TYPE, {"data": i}, start + i / 20)
     first.flush_sync(first.take())
-    async_to_sync(first.publish_latest)(store)
+    async_to_sync(first.publish_watermark)(store)
     assert store.get_all()[WATERMARK_KEY]["topics"][PERIODIC][1] == pytest.approx(20)
     for i in range(40, 45):  # taken but never written: the process dies before its next flush
         first.offer(PERIODIC, TYPE, {"data": i}, start + i / 20)
@@ -111,7 +75,7 @@ def test_numbered_messages_are_counted_exactly_and_the_count_adds_up_across_reco
         for n, seq in enumerate(seqs):  # irregular timing: the numbers, not the clock, tell the gap
             rec.offer(PERIODIC, "nav_msgs/Odometry", {"header": {"seq": seq}}, at + n * 0.3)
         rec.flush_sync(rec.take())
-        async_to_sync(rec.publish_latest)(store)
+        async_to_sync(rec.publish_watermark)(store)
         return rec
 
     recorder([1, 2, 3], start)

@@ -4,17 +4,16 @@ import pytest
 
 from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import default_interval_set, load_policies, policies_add_discovered, policy_upsert
-from history.sampling import latest_key, sample_periodic
-from robot.live.state import MemoryStore
+from history.recorder import Recorder
 
 TOPIC = "/history_test/periodic"
 
 
-def _store_with(t: float, value: int) -> MemoryStore:
-    store = MemoryStore()
-    store.put(latest_key(TOPIC), {"key": latest_key(TOPIC), "topic": TOPIC, "msg_type": "std_msgs/Int32",
-                                  "msg": {"data": value}, "t": t})
-    return store
+def _stored(rec: Recorder, t: float, value: int) -> int:
+    """Offer one message as the link would, with the policies as they are now; the rows it stored."""
+    rec.apply(load_policies())
+    rec.offer(TOPIC, "std_msgs/Int32", {"data": value}, t)
+    return rec.flush_sync(rec.take())
 
 
 def test_it_uses_the_global_interval_unless_the_topic_has_its_own(db, settings):
@@ -33,16 +32,17 @@ def test_it_applies_interval_changes_at_run_time(db):
     default_interval_set(seconds=10.0)
     policy_upsert(topic=TOPIC, msg_type="std_msgs/Int32", mode=Mode.PERIODIC)
     t0 = time.time() - 100
+    rec = Recorder()
 
-    assert sample_periodic(store=_store_with(t0, 1)) == 1
-    assert sample_periodic(store=_store_with(t0 + 2, 2)) == 0  # 2 s < 10 s default
+    assert _stored(rec, t0, 1) == 1
+    assert _stored(rec, t0 + 2, 2) == 0  # 2 s < 10 s default
 
     default_interval_set(seconds=1.0)
-    assert sample_periodic(store=_store_with(t0 + 2, 2)) == 1  # the new default wins at once
+    assert _stored(rec, t0 + 2, 2) == 1  # the new default wins at once
 
     policy_upsert(topic=TOPIC, interval_s=30.0)  # the topic's own interval beats the default
-    assert sample_periodic(store=_store_with(t0 + 4, 3)) == 0
-    assert sample_periodic(store=_store_with(t0 + 33, 4)) == 1
+    assert _stored(rec, t0 + 4, 3) == 0
+    assert _stored(rec, t0 + 33, 4) == 1
 
     assert list(Sample.objects.filter(topic=TOPIC).order_by("received_at").values_list("data", flat=True)) == [
         {"data": 1}, {"data": 2}, {"data": 4}
@@ -51,18 +51,22 @@ def test_it_applies_interval_changes_at_run_time(db):
 
 def test_it_never_stores_the_same_message_twice(db):
     policy_upsert(topic=TOPIC, msg_type="std_msgs/Int32", mode=Mode.PERIODIC, interval_s=0.1)
-    store = _store_with(time.time(), 1)
+    rec = Recorder()
+    t = time.time()
 
-    assert sample_periodic(store=store) == 1
-    assert sample_periodic(store=store) == 0  # same message: a second sampler run (or beat overlap) adds nothing
+    assert _stored(rec, t, 1) == 1
+    assert _stored(rec, t, 1) == 0  # the same message again (a resent one) adds nothing
     assert Sample.objects.filter(topic=TOPIC).count() == 1
 
 
-def test_it_ignores_topics_that_are_off_or_every_message(db):
+def test_it_ignores_topics_that_are_off_and_keeps_every_message_of_the_others(db):
     policy_upsert(topic=TOPIC, msg_type="std_msgs/Int32", mode=Mode.OFF)
-    assert sample_periodic(store=_store_with(time.time(), 1)) == 0
+    rec = Recorder()
+    t = time.time()
+    assert _stored(rec, t, 1) == 0
     policy_upsert(topic=TOPIC, mode=Mode.EVERY)
-    assert sample_periodic(store=_store_with(time.time(), 1)) == 0
+    assert _stored(rec, t, 1) == 1
+    assert _stored(rec, t + 0.001, 2) == 1
 
 
 def test_it_adds_discovered_topics_once_and_keeps_existing_policies(db):

@@ -64,7 +64,7 @@ async def test_it_follows_policy_changes_without_a_restart(recording, sim, link)
     assert await count(BURST_TOPIC) == 10
 
 
-async def test_it_samples_periodic_topics_in_the_embedded_schedule(recording, sim, link):
+async def test_it_samples_periodic_topics_as_they_arrive(recording, sim, link):
     battery = ri.topic("battery_soc")  # the simulator publishes it once a second
     await sync_to_async(policy_upsert)(topic=battery.name, msg_type=battery.type, mode=Mode.PERIODIC, interval_s=0.5)
 

@@ -16,7 +16,7 @@ async def test_a_recorder_cancelled_mid_write_ends_and_flushes():
     async def nothing(*_: object) -> None:
         return None
 
-    async def publish_latest(store: object) -> None:
+    async def publish_watermark(store: object) -> None:
         writing.set()
         await asyncio.sleep(0.2)
 
@@ -24,7 +24,7 @@ async def test_a_recorder_cancelled_mid_write_ends_and_flushes():
         flushes.append("flush")
         return 0
 
-    rec.reload, rec.resume_after, rec.publish_latest, rec.flush = nothing, nothing, publish_latest, flush
+    rec.reload, rec.resume_after, rec.publish_watermark, rec.flush = nothing, nothing, publish_watermark, flush
     running = asyncio.ensure_future(rec.run(types.SimpleNamespace(listeners=[], store=None)))
     await asyncio.wait_for(writing.wait(), 2)
     flushed_before = len(flushes)
