@@ -48,8 +48,6 @@ class TopicPolicy(models.Model):
     sensitive = models.BooleanField(
         default=False, help_text="Operators only: refused to viewers on the topics page, in history and exports. "
                                  "Sound (the microphone, the speaker) is always.")
-    # Compare-and-set marker so concurrent samplers never store the same message twice.
-    last_sampled_t = models.FloatField(default=0.0, editable=False)
     updated = models.DateTimeField(auto_now=True)
 
     class Meta:

@@ -24,7 +24,6 @@ class Policy:
     interval_s: float  # effective: the topic's own interval wins over the global default
     retention_s: float | None
     max_bytes: int
-    last_sampled_t: float = 0.0
 
 
 def effective_interval(own: float | None, default_s: float) -> float:
@@ -40,7 +39,6 @@ def load_policies() -> dict[str, Policy]:
             interval_s=effective_interval(p.interval_s, default_s),
             retention_s=p.retention_s,
             max_bytes=p.max_message_bytes or settings.HISTORY_MAX_MESSAGE_BYTES,
-            last_sampled_t=p.last_sampled_t,
         )
         for p in TopicPolicy.objects.all()
     }
