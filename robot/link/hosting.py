@@ -30,7 +30,7 @@ log = logging.getLogger(__name__)
 PROBE_INTERVAL_S = 1.0
 PROBE_TIMEOUT_S = 1.0
 
-# Other apps add background loops that must run where the link runs (e.g. history sampling
+# Other apps add background loops that must run where the link runs (e.g. history's recorder, and pruning
 # in the embedded default). Each gets the link and runs until cancelled.
 BackgroundService = Callable[[RobotLink], Awaitable[None]]
 _background: list[tuple[str, BackgroundService, bool]] = []
