@@ -31,7 +31,7 @@ from history.incidents import BLACKBOX_KEYS
 from history.models import Mode
 from history.policies import Policy, load_policies
 from history.sessions import SessionNotes
-from history.storage import FailureLog, Item, Pending, Taken, encode, write_batch
+from history.storage import FailureLog, Item, Pending, Taken, encode, newest_samples, write_batch
 from robot import interface as ri
 from robot.supervisor import holding
 
@@ -286,6 +286,13 @@ class Recorder:
         policies = await self._reload_log.attempt(load_policies)
         if policies is None:
             return  # the previous policies stay in force
+        new = [p.topic for p in policies.values() if p.mode == Mode.PERIODIC and p.topic not in self._last_due]
+        if new:
+            # A recorder taking over (a failover, a restart) goes on from the last sample stored, not twice.
+            last = await self._reload_log.attempt(newest_samples, new)
+            if last is None:
+                return
+            self._last_due.update(last)
         self.apply(policies)
         wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
         for name, msg_type in wanted.items():

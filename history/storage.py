@@ -104,6 +104,13 @@ async def in_thread[T](fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         raise
 
 
+def newest_samples(topics: Sequence[str]) -> dict[str, float]:
+    """Each topic's newest stored sample time (epoch seconds; 0 when none)."""
+    newest = (Sample.objects.filter(topic=topic).order_by("-received_at").values_list("received_at", flat=True)
+              .first() for topic in topics)
+    return {topic: at.timestamp() if at else 0.0 for topic, at in zip(topics, newest, strict=True)}
+
+
 def utc(t: float) -> datetime:
     return datetime.fromtimestamp(t, tz=UTC)
 

@@ -85,3 +85,23 @@ def test_numbered_messages_are_counted_exactly_and_the_count_adds_up_across_reco
     # The robot restarted and numbers from 1 again: unknown, not counted (and not negative).
     assert recorder([1, 2], start + 20).gap_lost == {}
     assert losses(store.get_all()[WATERMARK_KEY]) == {PERIODIC: 6}
+
+
+def test_a_recorder_taking_over_goes_on_from_the_last_sample_stored(transactional_db):
+    import types
+
+    policy_upsert(topic=PERIODIC, msg_type=TYPE, mode=Mode.PERIODIC, interval_s=10)
+    link = types.SimpleNamespace(subscribe=lambda *a, **k: None, unsubscribe=lambda *a, **k: None)
+    start = time.time() - 60
+    first = Recorder()
+    async_to_sync(first.reload)(link)
+    first.offer(PERIODIC, TYPE, {"data": 1.0}, start)
+    first.flush_sync(first.take())
+
+    second = Recorder()  # a failover or a restart, 4 s into the 10 s interval
+    async_to_sync(second.reload)(link)
+    second.offer(PERIODIC, TYPE, {"data": 2.0}, start + 4)
+    second.offer(PERIODIC, TYPE, {"data": 3.0}, start + 10)
+    second.flush_sync(second.take())
+
+    assert [round(t - start, 1) for t in _sampled_times()] == [0.0, 10.0]
