@@ -1,12 +1,12 @@
 """The black box: incidents around the moments that matter, kept in full by the recorder.
 
-``offer`` (a link listener, on the event-loop thread) checks the black box's topics for a
-trigger. The loop opens an incident for each trigger and for an E-STOP seen in the shared
-latch, adopts the incidents other processes opened (a marked moment), and has the recorder
-hold each window: the recorder keeps every message of the black box's topics an admin records
-every N seconds (and every camera frame) in it, those of the seconds before from its ring.
-Topics recorded every message are stored anyway; a topic the admin switched off stays
-unrecorded, incident or not.
+``offer`` (a link listener, on the event-loop thread) checks the trigger topics (bumpers, log,
+diagnostics, heard whatever their recording policy) for a trigger. The loop opens an incident
+for each trigger and for an E-STOP seen in the shared latch, adopts the incidents other
+processes opened (a marked moment), and has the recorder hold each window: the recorder keeps
+every message of the black box's topics an admin records every N seconds (and every camera
+frame) in it, those of the seconds before from its ring. Topics recorded every message are
+stored anyway; a topic the admin switched off stays unrecorded, incident or not.
 
 A restart loses the recorder's ring (the minute before an incident still open then), never what
 it took: a clean stop writes it.
@@ -21,7 +21,7 @@ from typing import Any
 
 from django.conf import settings
 
-from history.incidents import BLACKBOX_KEYS, Triggers, incident_open, incidents_to_capture
+from history.incidents import TRIGGER_KEYS, Triggers, incident_open, incidents_to_capture
 from history.models import Incident
 from history.recorder import Recorder
 from history.storage import FailureLog, in_thread
@@ -38,10 +38,9 @@ LINK_HOLDER = "blackbox"
 
 class BlackBox:
     def __init__(self) -> None:
-        self.topics = {ri.topic(key).name: ri.topic(key).type for key in BLACKBOX_KEYS}
+        self.topics = {ri.topic(key).name: ri.topic(key).type for key in TRIGGER_KEYS}
         self.triggers = Triggers()
         self.fired: list[tuple[str, float, str, str]] = []  # (kind, t, summary, by)
-        self.received = 0
         self._latch_at: float | None = None
 
     # --- on the event-loop thread: never blocks --------------------------------------
@@ -49,7 +48,6 @@ class BlackBox:
     def offer(self, name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if name not in self.topics:
             return
-        self.received += 1
         fired = self.triggers.check(name, msg)
         if fired is not None:
             self.fired.append((fired[0], t, fired[1], ""))

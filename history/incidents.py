@@ -19,6 +19,8 @@ BLACKBOX_KEYS = (
     "robot_pose", "odom", "amcl_pose", "plan", "move_base_status", "state_change", "robot_mode",
     "emotional_state", "battery_soc", "bumper_state", "motors_state", "diagnostics", "rosout",
 )
+# The topics the triggers read (the black box hears them whatever their recording policy).
+TRIGGER_KEYS = ("bumper_state", "rosout", "diagnostics")
 MAX_TRIGGERS = 50
 DRIVE_ACTIONS = ("teleop.lock", "teleop.takeover", "teleop.unlock", "estop")
 
@@ -30,7 +32,7 @@ class Triggers:
     def __init__(self) -> None:
         self._bumped = False
         self._diag_errors: set[str] = set()
-        self._names = {ri.topic(key).name: key for key in ("bumper_state", "rosout", "diagnostics")}
+        self._names = {ri.topic(key).name: key for key in TRIGGER_KEYS}
 
     def check(self, name: str, msg: dict[str, Any]) -> tuple[str, str] | None:
         key = self._names.get(name)

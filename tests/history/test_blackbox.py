@@ -170,8 +170,8 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
     odom = ri.topic("odom").name
     await _record_hourly("odom")
     first = asyncio.ensure_future(blackbox.run_blackbox(link))
-    await async_wait_until(lambda: (box := running(BlackBox)) is not None and box.received > 30, timeout=10,
-                           what="the black box hearing the robot")
+    await async_wait_until(lambda: running(BlackBox) is not None and recording.received > 30, timeout=10,
+                           what="the recorder hearing the robot")
     await asyncio.sleep(settings.INCIDENT_BEFORE_S + 0.5)  # its ring holds the seconds before the mark
     # A web process marks the moment: only the database tells the black box.
     incident = await sync_to_async(incident_open)(kind=Incident.Kind.MANUAL, t=time.time(), by="otto")
@@ -203,7 +203,7 @@ async def test_a_marked_moment_from_another_process_is_captured_across_a_restart
 @pytest.mark.django_db(transaction=True)
 async def test_an_incident_leaves_topics_the_admin_does_not_record_unrecorded(black_box, recording, link):
     odom = ri.topic("odom").name  # no policy: not recorded
-    await async_wait_until(lambda: black_box.received > 30, timeout=10, what="the black box hearing the robot")
+    await async_wait_until(lambda: recording.received > 30, timeout=10, what="the recorder hearing the robot")
     incident = await sync_to_async(incident_open)(kind=Incident.Kind.MANUAL, t=time.time())
     await async_wait_until(lambda: incident.pk in recording.windows, timeout=5, what="the incident adopted")
     pose = ri.topic("robot_pose").name
