@@ -141,6 +141,8 @@ def write_batch(items: Sequence[Item]) -> int:
             frames.append(item)
         else:
             rows.append(item)
+    if not frames:
+        return write_rows(rows)
     with transaction.atomic():
         return write_frames(sorted(frames, key=lambda frame: frame[0])) + write_rows(rows)
 
