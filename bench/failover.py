@@ -177,8 +177,7 @@ def worker_outage(topo: Topology) -> int:
 def main() -> None:
     redis_server = PrivateRedis().start()
     postgres = PrivatePostgres().start()
-    topo = Topology(redis_url=redis_server.url, database_url=postgres.url,
-                    env={"HISTORY_SAMPLE_TICK_S": "0.5"})
+    topo = Topology(redis_url=redis_server.url, database_url=postgres.url)
     topo.env["STACK_SIM_ARGS"] = f"--pose-rate {RATE_HZ:g}"
     os.environ.update({"DATABASE_URL": postgres.url, "REDIS_URL": redis_server.url,
                        "CHANNEL_LAYER_PREFIX": topo.prefix, "DJANGO_SETTINGS_MODULE": "cyborg_site.settings"})

@@ -96,7 +96,7 @@ class Topology:
         self.web_ports = (free_port(), free_port())
         self.prefix = f"cyborg-topology-{os.getpid()}"
         self.redis_url = redis_url
-        extra = {"ROBOT_LINK_MAX_BACKOFF_S": "1", "HISTORY_SAMPLE_TICK_S": "0.5", **(env or {})}
+        extra = {"ROBOT_LINK_MAX_BACKOFF_S": "1", **(env or {})}
         self.env = {
             **{k: v for k, v in os.environ.items() if not k.startswith(("DJANGO_", "PYTEST_"))},
             "STACK_DIR": str(self.dir), "STACK_HTTPS_PORT": str(self.https_port),
