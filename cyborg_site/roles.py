@@ -23,6 +23,12 @@ def _groups(user: Any) -> set[str]:
     return cached
 
 
+def load_roles(user: Any) -> Any:
+    """``user`` with its groups read, so the role checks below ask the database nothing more."""
+    _groups(user)
+    return user
+
+
 def roles_cached(user: Any) -> bool:
     """Whether the role checks below can answer for ``user`` without a query (safe on an event loop)."""
     # A lazy user (request.user, a socket's scope user) counts only once resolved: touching

@@ -292,6 +292,12 @@ ROBOT_REQUEST_TIMEOUT_S = env_float("ROBOT_REQUEST_TIMEOUT_S", 5.0, minimum=0.1)
 # subscription this long before the link lets go; a watched topic reaches pages at most this often.
 TOPICS_IDLE_GRACE_S = env_float("TOPICS_IDLE_GRACE_S", 5.0, minimum=0)
 TOPICS_ECHO_MAX_HZ = env_float("TOPICS_ECHO_MAX_HZ", 20.0, minimum=0.5)
+# The rosbridge front door for other ROS tools (robot.frontdoor): a connect ticket works once, this soon;
+# a client asking no throttle gets the robot's high-rate topics this often (per topic in the admin);
+# browsers' origins accepted besides the site's own (a Foxglove or Lichtblick web app, a roslibjs page).
+FRONTDOOR_TICKET_S = env_float("FRONTDOOR_TICKET_S", 30.0, minimum=1)
+FRONTDOOR_PACE_HZ = env_float("FRONTDOOR_PACE_HZ", 10.0, minimum=0.1)
+FRONTDOOR_ORIGINS = env_list("FRONTDOOR_ORIGINS", [])
 # Values older than this are shown as stale (greyed) on the pages.
 STALE_AFTER_S = env_float("STALE_AFTER_S", 10.0, minimum=0.5)
 BATTERY_LOW_PERCENT = env_float("BATTERY_LOW_PERCENT", 20.0, minimum=0)

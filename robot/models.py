@@ -14,6 +14,7 @@ class AuditEntry(models.Model):
         PAGE = "page"
         API = "api"
         WEBSOCKET = "websocket"
+        FRONTDOOR = "frontdoor"  # a ROS tool through the rosbridge front door
         SYSTEM = "system"
 
     created = models.DateTimeField(auto_now_add=True, db_index=True)
@@ -130,3 +131,45 @@ class UplinkCredential(models.Model):
     def __str__(self) -> str:
         state = "revoked" if self.revoked else "active"
         return f"{self.robot} uplink {self.key_id} ({state})"
+
+
+class ConnectTicket(models.Model):
+    """A short-lived, single-use ticket that lets one ROS tool's websocket in through the front door.
+    Only a hash of it is kept; it works once, within seconds of being issued."""
+
+    digest = models.CharField(max_length=64, primary_key=True)
+    user = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.CASCADE)
+    expires = models.DateTimeField(db_index=True)
+    used = models.DateTimeField(null=True, blank=True)
+
+    def __str__(self) -> str:
+        return f"ticket for {self.user} until {self.expires:%H:%M:%S}"
+
+
+class FrontDoorAllowance(models.Model):
+    """A further topic operators may publish, or service they may call, through the front door
+    (beyond what the product's own commands cover; nothing by default). Goes through the command
+    pipeline as ``frontdoor.publish`` / ``frontdoor.call``: audited, refused under the E-STOP."""
+
+    class Kind(models.TextChoices):
+        TOPIC = "topic"
+        SERVICE = "service"
+
+    kind = models.CharField(max_length=8, choices=Kind.choices)
+    name = models.CharField(max_length=255, help_text="The full ROS name, e.g. /my_node/cmd.")
+
+    class Meta:
+        constraints = [models.UniqueConstraint(fields=["kind", "name"], name="frontdoor_allowance_unique")]
+
+    def __str__(self) -> str:
+        return f"{self.kind} {self.name}"
+
+
+class FrontDoorPace(models.Model):
+    """How often a front-door client that asks for no throttle gets a topic's messages."""
+
+    topic = models.CharField(max_length=255, primary_key=True)
+    hz = models.FloatField(validators=[MinValueValidator(0.0)], help_text="0: every message.")
+
+    def __str__(self) -> str:
+        return f"{self.topic} at {self.hz:g} Hz" if self.hz else f"{self.topic}: every message"

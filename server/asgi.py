@@ -11,7 +11,7 @@ from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 
 from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
-from dashboard.routing import websocket_urlpatterns  # noqa: E402
+from dashboard.routing import FRONTDOOR_SOCKET_PATH, websocket_urlpatterns  # noqa: E402
 from robot.api.fast_commands import FastCommandApp  # noqa: E402
 from robot.api.fast_state import FastStateApp  # noqa: E402
 from robot.link.hosting import autostart_in_daphne  # noqa: E402
@@ -25,7 +25,8 @@ application = ProtocolTypeRouter(
     {
         "http": ClientAddress(CountRequests(ReadThrottle(FastCommandApp(FastStateApp(django_asgi_app),
                                                                         django_asgi_app)))),
-        "websocket": ClientAddress(OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns)))),
+        "websocket": ClientAddress(OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns)),
+                                               ticket_paths=(FRONTDOOR_SOCKET_PATH,))),
     }
 )
 

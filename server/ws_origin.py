@@ -64,12 +64,23 @@ def origin_allowed(origin: str | None, scope: dict[str, Any]) -> bool:
 
 
 class OriginCheck:
-    """ASGI middleware: refuse the websocket handshake (403) from any other origin."""
+    """ASGI middleware: refuse the websocket handshake (403) from any other origin.
 
-    def __init__(self, application: Any) -> None:
+    On ``ticket_paths`` (the front door for ROS tools) a socket without an Origin is a tool, not a
+    browser, and its single-use ticket is what lets it in; a browser's Origin must still be the site's
+    or one of ``FRONTDOOR_ORIGINS`` (a Foxglove web app, a roslibjs page elsewhere)."""
+
+    def __init__(self, application: Any, *, ticket_paths: tuple[str, ...] = ()) -> None:
         self.application = application
+        self.ticket_paths = ticket_paths
 
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> Any:
-        if scope["type"] == "websocket" and not origin_allowed(_header(scope, "origin"), scope):
+        if scope["type"] == "websocket" and not self._allowed(scope):
             return await WebsocketDenier()(scope, receive, send)
         return await self.application(scope, receive, send)
+
+    def _allowed(self, scope: dict[str, Any]) -> bool:
+        origin = _header(scope, "origin")
+        if scope.get("path") in self.ticket_paths:
+            return origin is None or origin in settings.FRONTDOOR_ORIGINS or origin_allowed(origin, scope)
+        return origin_allowed(origin, scope)

@@ -55,6 +55,8 @@ MOVES: dict[str, Declaration] = {
     "audio.listen.start": never,
     "link.reconnect": never,
     "audio.talk.start": always,  # the E-STOP ends every talk; no new one starts under it
+    "frontdoor.publish": always,  # an admin's allowlisted topic: nobody here knows what it does
+    "frontdoor.call": always,
 }
 
 

@@ -36,17 +36,20 @@ class LocalWatches:
         self.holder = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
         self.watchers: dict[str, set[Any]] = {}  # topic -> the sockets watching it
         self.holding: dict[str, set[Any]] = {}  # registry topic key -> the sockets whose live keys need it
+        self.whole: dict[str, set[Any]] = {}  # topic -> the sockets taking its every message whole (front door)
         self._lock = asyncio.Lock()
         self._renewing: asyncio.Task | None = None
 
-    async def watch(self, watcher: Any, name: str) -> None:
-        """``watcher`` watches ``name``; TopicRefused when the name is bad or the robot has no such topic.
-        While the robot is offline the watch stays and takes effect when it returns."""
+    async def watch(self, watcher: Any, name: str, *, whole: bool = False) -> None:
+        """``watcher`` watches ``name`` (summarised, or with ``whole`` every message whole); TopicRefused
+        when the name is bad or the robot has no such topic. While the robot is offline the watch stays
+        and takes effect when it returns."""
         problem = ri.topic_name_problem(name)
         if problem:
             raise TopicRefused("invalid", problem)
-        first = name not in self.watchers
-        self.watchers.setdefault(name, set()).add(watcher)
+        table = self.whole if whole else self.watchers
+        first = name not in table
+        table.setdefault(name, set()).add(watcher)
         self._ensure_renewing()
         if not first:
             return
@@ -55,14 +58,14 @@ class LocalWatches:
         except RobotOffline as exc:
             raise TopicRefused("offline", exc.message) from None
         except RobotError as exc:
-            _leave(self.watchers, watcher, name)
+            _leave(table, watcher, name)
             raise TopicRefused(exc.code, exc.message) from None
         if name in refused:
-            _leave(self.watchers, watcher, name)
+            _leave(table, watcher, name)
             raise TopicRefused(refused[name].get("code", "failed"), refused[name].get("error", "refused"))
 
-    async def unwatch(self, watcher: Any, name: str) -> None:
-        if _leave(self.watchers, watcher, name):
+    async def unwatch(self, watcher: Any, name: str, *, whole: bool = False) -> None:
+        if _leave(self.whole if whole else self.watchers, watcher, name):
             await self._sync_quietly()
 
     async def hold(self, watcher: Any, keys: Iterable[str]) -> None:
@@ -82,7 +85,7 @@ class LocalWatches:
 
     async def drop(self, watcher: Any) -> None:
         """``watcher`` went away: let go of everything it watched and held."""
-        gone = [name for name in list(self.watchers) if _leave(self.watchers, watcher, name)]
+        gone = [name for table in (self.watchers, self.whole) for name in list(table) if _leave(table, watcher, name)]
         released = [key for key in list(self.holding) if _leave(self.holding, watcher, key)]
         if gone or released:
             await self._sync_quietly()
@@ -90,7 +93,7 @@ class LocalWatches:
     async def _sync(self) -> dict[str, dict[str, str]]:
         async with self._lock:
             reply = await arequest("topics_watch", holder=self.holder, topics=sorted(self.watchers),
-                                   held=sorted(self.holding), timeout=SYNC_TIMEOUT_S)
+                                   held=sorted(self.holding), whole=sorted(self.whole), timeout=SYNC_TIMEOUT_S)
         return dict(reply.get("refused") or {})
 
     async def _sync_quietly(self) -> None:
@@ -104,9 +107,9 @@ class LocalWatches:
             self._renewing = supervise(f"topics.renew.{self.holder[-8:]}", self._renew_forever)
 
     async def _renew_forever(self) -> None:
-        while self.watchers or self.holding:
+        while self.watchers or self.holding or self.whole:
             await asyncio.sleep(RENEW_S)
-            if self.watchers or self.holding:
+            if self.watchers or self.holding or self.whole:
                 await self._sync_quietly()
 
 

@@ -22,7 +22,7 @@ import itertools
 import logging
 import time
 from collections.abc import Awaitable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from django.conf import settings
@@ -42,6 +42,7 @@ log = logging.getLogger(__name__)
 SWEEP_S = 0.1
 HOLDER = "watch"  # this module's hold on the link's upstream subscriptions
 ECHO_PREFIX = "topic:"
+WHOLE_PREFIX = "whole:"
 LIST_CACHE_S = 2.0
 BULKY_ITEMS = 10_000
 RATE_WINDOW_S = (0.5, 10.0)  # the shortest and longest measuring window a request may ask for
@@ -55,6 +56,11 @@ def echo_key(name: str) -> str:
 
 def is_echo_key(key: str) -> bool:
     return key.startswith(ECHO_PREFIX)
+
+
+def whole_key(name: str) -> str:
+    """The live key under which a topic's every message goes, whole (the front door's rosbridge clients)."""
+    return WHOLE_PREFIX + name
 
 
 class TopicRefused(Exception):
@@ -73,12 +79,14 @@ class Watches:
         self.link = link
         self.leases = Leases()  # topic -> holders: echoed to pages
         self.holds = Leases()  # the same for registry topics held for live keys
+        self.whole = Leases()  # the same for topics sent whole, every message
         self.idle_since: dict[str, float] = {}  # topic -> when its last lease went (the grace period runs)
         self.types: dict[str, str] = {}
         self.counters: dict[int, tuple[str, list[float]]] = {}  # rate measurements: id -> (topic, receive times)
         # The last message of every subscribed topic (a reference, summarised only when needed): a page that
         # opens a topic someone else already holds still sees its latched or rare message at once.
         self.last: dict[str, TopicUpdate] = {}
+        self.summarised: set[str] = set()  # the topics whose last message is kept summarised (bulky)
         self._listing: tuple[float, list[dict[str, Any]]] | None = None
         assert link.loop is not None
         self.coalescer = Coalescer(self._send, loop=link.loop)
@@ -87,28 +95,37 @@ class Watches:
 
     # --- leases ----------------------------------------------------------------------
 
-    async def sync(self, holder: str, topics: list[str], held: list[str] | None = None) -> dict[str, dict[str, str]]:
-        """``holder`` now watches exactly ``topics`` and holds exactly the registry topics with the keys
-        ``held``; returns the ones refused: name (or key) -> {code, error}."""
+    async def sync(self, holder: str, topics: list[str], held: list[str] | None = None,
+                   whole: list[str] | None = None) -> dict[str, dict[str, str]]:
+        """``holder`` now watches exactly ``topics`` (summarised), ``whole`` (every message whole) and
+        holds exactly the registry topics with the keys ``held``; returns the ones refused: name (or
+        key) -> {code, error}."""
         wanted = list(dict.fromkeys(topics))
+        entire = list(dict.fromkeys(whole or []))
         refused: dict[str, dict[str, str]] = {}
         kept = self._registry_topics(held or [], refused)
         self.leases.keep_only(holder, wanted)
         self.holds.keep_only(holder, kept)
-        for name in wanted:
-            try:
-                msg_type = await self.resolve(name)
-            except TopicRefused as exc:
-                refused[name] = {"code": exc.code, "error": exc.message}
-                continue
-            if msg_type in ri.SOUND_TYPES:
-                refused[name] = {"code": "forbidden", "error": f"{name} carries sound: listen on the drive page "
-                                                               "(operators; audited)"}
-                continue
-            new = name not in self.leases
-            self._lease(self.leases, name, msg_type, holder)
-            if new and name in self.last:
-                self.coalescer.offer(echo_key(name), settings.TOPICS_ECHO_MAX_HZ, self.last[name])
+        self.whole.keep_only(holder, entire)
+        for table, names in ((self.leases, wanted), (self.whole, entire)):
+            for name in names:
+                try:
+                    msg_type = await self.resolve(name)
+                except TopicRefused as exc:
+                    refused[name] = {"code": exc.code, "error": exc.message}
+                    continue
+                if msg_type in ri.SOUND_TYPES:
+                    refused[name] = {"code": "forbidden", "error": f"{name} carries sound: listen on the drive "
+                                                                   "page (operators; audited)"}
+                    continue
+                new = name not in table
+                self._lease(table, name, msg_type, holder)
+                if new and name in self.last:
+                    if table is self.whole:
+                        if name not in self.summarised:
+                            self.coalescer.offer(whole_key(name), None, {**self.last[name], "key": whole_key(name)})
+                    else:
+                        self.coalescer.offer(echo_key(name), settings.TOPICS_ECHO_MAX_HZ, self.last[name])
         for name, msg_type in kept.items():
             self._lease(self.holds, name, msg_type, holder)
         self.sweep()
@@ -154,8 +171,8 @@ class Watches:
 
     def sweep(self) -> None:
         now = time.monotonic()
-        for name in [*self.leases.expire(), *self.holds.expire()]:
-            if name not in self.leases and name not in self.holds:
+        for name in [*self.leases.expire(), *self.holds.expire(), *self.whole.expire()]:
+            if name not in self.leases and name not in self.holds and name not in self.whole:
                 self.idle_since[name] = now
         grace = settings.TOPICS_IDLE_GRACE_S
         for name, since in list(self.idle_since.items()):
@@ -177,8 +194,14 @@ class Watches:
         for topic, times in self.counters.values():
             if topic == name:
                 times.append(t)
+        if name in self.whole:  # every message, whole, for the front door's clients (paced per client)
+            self.coalescer.offer(whole_key(name), None, {"type": "robot.update", "key": whole_key(name),
+                                                          "topic": name, "msg_type": msg_type, "msg": msg, "t": t})
         if _bulky(msg):  # never keep a whole map or costmap alive just in case someone opens it
             msg = summarise(msg)
+            self.summarised.add(name)
+        else:
+            self.summarised.discard(name)
         update: TopicUpdate = {"type": "robot.update", "key": echo_key(name), "topic": name,
                                "msg_type": msg_type, "msg": msg, "t": t}
         self.last[name] = update
@@ -187,6 +210,10 @@ class Watches:
 
     async def _send(self, update: TopicUpdate) -> None:
         event = dict(update)
+        if update["key"].startswith(WHOLE_PREFIX):
+            # Kept for a later subscriber's first message (a latched topic's only one), unless bulky.
+            await aannounce(update["key"], event, keep=not _bulky(update["msg"]), store=self.link.store)
+            return
         event["msg"] = summarise(update["msg"])
         await aannounce(update["key"], event, store=self.link.store)
 
@@ -250,10 +277,11 @@ async def _answer(values: Awaitable[Any]) -> LinkReply:
 
 
 async def _watch(link: RobotLink, request: LinkRequest) -> LinkReply:
-    topics, held = request.get("topics"), request.get("held") or []
-    if not isinstance(topics, list) or not isinstance(held, list) or not all(isinstance(n, str) for n in topics + held):
+    lists = [request.get("topics"), request.get("held") or [], request.get("whole") or []]
+    if not all(isinstance(x, list) and all(isinstance(n, str) for n in x) for x in lists):
         return {"ok": False, "error_code": "invalid", "error": "topics_watch needs lists of topic names and keys"}
-    refused = await watches_of(link).sync(str(request.get("holder") or ""), topics, held)
+    topics, held, whole = (cast(list[str], x) for x in lists)
+    refused = await watches_of(link).sync(str(request.get("holder") or ""), topics, held, whole)
     return {"ok": True, "refused": refused}
 
 

@@ -77,6 +77,7 @@ class Socket:
     """One websocket's watched keys and pending updates (pre-serialised JSON fragments)."""
 
     __slots__ = ("dropped", "keys", "pending", "send", "sending", "status", "tracking", "writer")
+    framed = True  # written by the hub's flush (False: a socket that writes its updates itself)
 
     def __init__(self, send: Send, writer: FrameWriter | None = None) -> None:
         self.send = send
@@ -132,7 +133,9 @@ class Hub:
     # --- sockets ---------------------------------------------------------------------
 
     def attach(self, send: Send, writer: FrameWriter | None = None) -> Socket:
-        socket = Socket(send, writer)
+        return self.add(Socket(send, writer))
+
+    def add(self, socket: Socket) -> Socket:
         self.sockets.add(socket)
         return socket
 
@@ -174,10 +177,14 @@ class Hub:
         watchers = self._watchers.get(key)
         if not watchers:
             return
+        framed = False
         for socket in watchers:
             socket.offer(key, fragment, t, every)
-        self._dirty.update(watchers)
-        self._schedule()
+            if socket.framed:
+                self._dirty.add(socket)
+                framed = True
+        if framed:
+            self._schedule()
 
     def publish_status(self, frame: str) -> None:
         """A link status frame for every socket (latest wins)."""
@@ -204,8 +211,9 @@ class Hub:
     def _send_status(self) -> None:
         frame = self.status_frame()
         for socket in self.sockets:
-            socket.status = frame
-        self._dirty.update(self.sockets)
+            if socket.framed:
+                socket.status = frame
+                self._dirty.add(socket)
         self._schedule()
 
     def offer(self, socket: Socket, key: str, fragment: str, t: float, *, every: bool = False) -> None:
