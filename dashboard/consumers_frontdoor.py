@@ -53,7 +53,7 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
             return [] if is_operator(user) else await user_refuses(user, names)
 
         writer_ = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
-        self.session = Session(user=user, operator=is_operator(user), owner=self.channel_name, send=self._send_text,
+        self.session = Session(user=user, operator=is_operator(user), owner=self.channel_name, send=self._send_frame,
                                writer=writer_, refuses=refuses, paces=paces, topics=topics, services=services)
         await self.channel_layer.group_add(person_group(user.pk), self.channel_name)
         if self.session.operator:
@@ -75,8 +75,9 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
         if self.session is not None:
             await self.session.handle(text_data if text_data is not None else bytes_data or b"")
 
-    async def _send_text(self, text: str) -> None:
-        await self.base_send({"type": "websocket.send", "text": text})
+    async def _send_frame(self, frame: str | bytes) -> None:
+        await self.base_send({"type": "websocket.send", "bytes": frame} if isinstance(frame, bytes)
+                             else {"type": "websocket.send", "text": frame})
 
     async def access_changed(self, event: dict[str, Any]) -> None:
         if self.session is not None:

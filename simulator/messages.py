@@ -138,6 +138,7 @@ SERVICE_DEFS: dict[str, tuple[str, str]] = {
         "string emotional_state; float32 current_pleasure; float32 current_arousal; float32 current_dominance",
     ),
     "rosapi/Topics": ("", "string[] topics; string[] types"),
+    "rosapi/TopicsAndRawTypes": ("", "string[] topics; string[] types; string[] typedefs_full_text"),
     "rosapi/TopicType": ("string topic", "string type"),
     "rosapi/TopicsForType": ("string type", "string[] topics"),
     "rosapi/Services": ("", "string[] services"),

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import messages
+from . import messages, rawtypes
 
 log = logging.getLogger("simulator.rosbridge")
 
@@ -53,7 +53,8 @@ class Subscription:
     params: dict[Any, tuple[int, int]] = field(default_factory=dict)  # sid -> (throttle ms, queue length)
     throttle_s: float = 0.0
     last_sent: float = 0.0
-    queue: collections.deque[str] | None = None
+    raw: bool = False  # compression cbor-raw: CBOR frames with the serialized message (simulator.rawtypes)
+    queue: collections.deque[str | bytes] | None = None
     wake: asyncio.Event | None = None
     pump: asyncio.Task[None] | None = None
 
@@ -68,7 +69,7 @@ class Subscription:
         else:
             self.stop()
 
-    def offer(self, frame: str) -> None:
+    def offer(self, frame: str | bytes) -> None:
         if self.queue is not None and self.wake is not None:
             self.queue.append(frame)  # full deque drops the oldest, as rosbridge's queue does
             self.wake.set()
@@ -132,8 +133,13 @@ class Broker:
         frame = messages.encode({"op": "publish", "topic": topic, "msg": msg})
         if latch:
             self.latched[topic] = frame
+        raw: bytes | None = None
         for sub in list(subs.values()) if subs else ():
-            sub.offer(frame)
+            if sub.raw:
+                raw = raw or rawtypes.cbor_raw_frame(topic, self.types.get(topic, ""), msg)
+                sub.offer(raw)
+            else:
+                sub.offer(frame)
 
     def latched_frame(self, topic: str) -> str | None:
         if topic not in self.latched and topic in self.lazy_latched:
@@ -198,23 +204,23 @@ class Client:
         "advertise_service", "unadvertise_service", "service_response", "fragment",
     )
 
-    def __init__(self, broker: Broker, send: Callable[[str], Any], address: str = "") -> None:
+    def __init__(self, broker: Broker, send: Callable[[str | bytes], Any], address: str = "") -> None:
         self.broker = broker
         self.id = next(broker.client_ids)
         self.address = address
         self.connected_at = time.time()
         self._send = send  # coroutine function: await send(text)
-        self.outbox: asyncio.Queue[str] = asyncio.Queue()
+        self.outbox: asyncio.Queue[str | bytes] = asyncio.Queue()
         self.closed = False
         self.fragments: dict[Any, dict[int, str]] = {}
 
     # --- output ----------------------------------------------------------------------
 
-    def send(self, frame: str) -> None:
+    def send(self, frame: str | bytes) -> None:
         if not self.closed:
             self.outbox.put_nowait(frame)
 
-    async def send_now(self, frame: str) -> None:
+    async def send_now(self, frame: str | bytes) -> None:
         if not self.closed:
             await self._send(frame)
 
@@ -310,10 +316,12 @@ class Client:
         self.broker.types[topic] = self._topic_type(topic, frame.get("type"))
         sub = self.broker.subs[topic].setdefault(self.id, Subscription(self))
         sub.params[mid] = (max(0, frame.get("throttle_rate", 0)), max(0, frame.get("queue_length", 0)))
+        sub.raw = frame.get("compression") == "cbor-raw"
         sub.update()
         latched = self.broker.latched_frame(topic)
         if latched is not None:
-            self.send(latched)
+            self.send(rawtypes.cbor_raw_frame(topic, self.broker.types[topic], json.loads(latched)["msg"])
+                      if sub.raw else latched)
 
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str)])

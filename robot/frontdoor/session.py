@@ -19,6 +19,7 @@ from django.conf import settings
 from robot import interface as ri
 from robot.commands.audit_writer import writer
 from robot.commands.pipeline import arun
+from robot.frontdoor import encoding
 from robot.frontdoor import protocol as p
 from robot.frontdoor.rules import Refused, call_command, is_cmd_vel, publish_command, rosapi_type
 from robot.link.bus import RobotError, arequest
@@ -34,13 +35,13 @@ from robot.teleop.twist import server_limits
 
 log = logging.getLogger(__name__)
 
-Send = Callable[[str], Awaitable[None]]
+Send = Callable[[str | bytes], Awaitable[None]]
 Refuses = Callable[[list[str]], Awaitable[list[str]]]  # the topics of these this person may not watch
 WRITE_POLL_S = 0.005
 MAX_BACKLOG = 1000  # per client: every-message updates kept while it is slow (oldest dropped)
 
 
-async def _nothing(text: str) -> None:
+async def _nothing(text: str | bytes) -> None:
     return None
 
 
@@ -83,6 +84,7 @@ class Session:
         self.allowed_services = services or set()
         self.subs: dict[str, dict[str | None, p.Subscribe]] = {}  # topic -> subscription id -> options
         self.rates: dict[str, float | None] = {}
+        self.compression: dict[str, str] = {}  # topic -> none | cbor | cbor-raw (its latest subscription's)
         self.advertised: dict[str, str] = {}
         self.driver = Driver(user=user, owner=owner, can_drive=operator, send=self._driver_said)
         self.hub: Hub | None = None
@@ -126,12 +128,13 @@ class Session:
         sub = p.subscribe(frame)
         if sub.compression == "png":
             raise p.BadFrame("png compression is not served: subscribe with none, cbor or cbor-raw")
-        if sub.compression != "none":
-            raise p.BadFrame(f"{sub.compression} compression is not served yet: subscribe with none")
         if await self._refuses([sub.topic]):
             raise Refused(f"{sub.topic} is sensitive: operators only")
+        if sub.compression == "cbor-raw":
+            await encoding.learn(sub.topic)
         first = sub.topic not in self.subs
         self.subs.setdefault(sub.topic, {})[sub.id] = sub
+        self.compression[sub.topic] = sub.compression
         self._set_rate(sub.topic)
         if not first:
             return
@@ -163,6 +166,7 @@ class Session:
             self._set_rate(topic)
             return
         del self.subs[topic]
+        self.compression.pop(topic, None)
         assert self.hub is not None
         self.hub.unwatch(self.socket, [whole_key(topic)])
         await local_watches().unwatch(self.socket, topic, whole=True)
@@ -226,9 +230,13 @@ class Session:
 
     def _on_update(self, topic: str, fragment: str) -> None:
         if topic in self.subs and self.coalescer is not None:
-            self.coalescer.offer(topic, self.rates.get(topic), p.publish_from_fragment(topic, fragment))
+            compression = self.compression.get(topic, "none")
+            frame = p.publish_from_fragment(topic, fragment) if compression == "none" else \
+                encoding.frame(topic, fragment, compression)
+            if frame is not None:
+                self.coalescer.offer(topic, self.rates.get(topic), frame)
 
-    async def _write(self, frame: str) -> None:
+    async def _write(self, frame: str | bytes) -> None:
         """One frame, once the client took the previous one (meanwhile its coalescer drops the oldest)."""
         if self._writer is not None:
             while (backlog := self._writer.backlog()) > 0:

@@ -17,7 +17,7 @@ from typing import Any
 
 from robot import interface as ri
 
-from .. import messages
+from .. import messages, rawtypes
 from ..bus import Bus, SimNode
 from ..protocol import ServiceError
 
@@ -51,6 +51,9 @@ class BridgeNode(SimNode):
         bus.declare("/connected_clients", "rosbridge_msgs/ConnectedClients")
         bus.answer("rosapi_topics", lambda r: {"topics": sorted(broker.types),
                                               "types": [broker.types[n] for n in sorted(broker.types)]})
+        bus.answer_name("/rosapi/topics_and_raw_types", "rosapi/TopicsAndRawTypes", lambda r: {
+            "topics": sorted(broker.types), "types": [broker.types[n] for n in sorted(broker.types)],
+            "typedefs_full_text": [rawtypes.full_text(broker.types[n]) for n in sorted(broker.types)]})
         bus.answer("rosapi_topic_type", lambda r: {"type": broker.types.get(r["topic"], "")})
         bus.answer("rosapi_services", lambda r: {"services": sorted(broker.services)})
         bus.answer("rosapi_get_time", lambda r: {"time": messages.stamp()})

@@ -3,11 +3,8 @@ point) against the real product: Daphne with the link inside, driving the simula
 
 from __future__ import annotations
 
-import json
 import time
 import urllib.error
-import urllib.request
-from collections.abc import Iterator
 
 import pytest
 import roslibpy
@@ -15,65 +12,11 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from robot import interface as ri
+from tests.frontdoor.conftest import post, raw_frames, received, ros_for, subscriptions, ticket_url
 from tests.helpers import wait_until
 from tests.sim.support import Inbox
-from tests.stack import PASSWORD, Stack
 
 ODOM, BATTERY, CMD_VEL = ri.topic("odom").name, ri.topic("battery_soc").name, ri.topic("cmd_vel").name
-
-
-def _post(stack: Stack, path: str, token: str = "", data: dict | None = None) -> dict:
-    headers = {"Content-Type": "application/json"}
-    if token:
-        headers["Authorization"] = f"Token {token}"
-    request = urllib.request.Request(f"{stack.url}{path}", data=json.dumps(data or {}).encode(), headers=headers)
-    with urllib.request.urlopen(request, timeout=20) as res:
-        return json.loads(res.read())
-
-
-@pytest.fixture(scope="module")
-def stack() -> Iterator[Stack]:
-    with Stack(env={"TELEOP_DEADMAN_S": "0.5", "TOPICS_IDLE_GRACE_S": "0.5"}) as running:
-        running.wait_robot_online(timeout=60)
-        running.tokens = {name: _post(running, "/api/auth/token/", data={"username": name, "password": PASSWORD})
-                          ["token"] for name in ("otto", "vera")}
-        yield running
-
-
-def ticket_url(stack: Stack, who: str) -> str:
-    return _post(stack, "/api/frontdoor/ticket/", stack.tokens[who])["url"]
-
-
-def ros_for(stack: Stack, who: str) -> roslibpy.Ros:
-    ros = roslibpy.Ros(ticket_url(stack, who))
-    ros.run(timeout=30)
-    return ros
-
-
-def received(stack: Stack, topic: str) -> list[dict]:
-    with urllib.request.urlopen(f"http://127.0.0.1:{stack.video_port}/sim/received?topic={topic}&last=200",
-                                timeout=10) as res:
-        return json.loads(res.read())["messages"]
-
-
-def subscriptions(stack: Stack, topic: str) -> int:
-    with urllib.request.urlopen(f"http://127.0.0.1:{stack.video_port}/sim/introspect", timeout=10) as res:
-        return int(json.loads(res.read())["subscriptions"].get(topic, 0))
-
-
-def raw_frames(url: str, frames: list[dict], until: str, timeout: float = 20) -> list[dict]:
-    """Send ``frames`` on a raw socket; return what came back until a frame containing ``until``."""
-    seen: list[dict] = []
-    with connect(url, open_timeout=20) as ws:
-        for frame in frames:
-            ws.send(json.dumps(frame))
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            text = ws.recv(timeout=deadline - time.monotonic())
-            seen.append(json.loads(text))
-            if until in text:
-                return seen
-    raise AssertionError(f"no frame with {until!r}: {seen[-5:]}")
 
 
 def test_a_viewer_subscribes_lists_topics_and_shares_one_upstream_subscription(stack):
@@ -135,7 +78,7 @@ def test_an_operator_drives_and_the_deadman_stops_the_robot_when_input_stops(sta
 
 
 def test_velocity_is_refused_while_the_estop_is_latched(stack):
-    _post(stack, "/api/robot/estop/", stack.tokens["otto"])
+    post(stack, "/api/robot/estop/", stack.tokens["otto"])
     try:
         time.sleep(0.5)
         seen = raw_frames(ticket_url(stack, "otto"), [
@@ -145,7 +88,7 @@ def test_velocity_is_refused_while_the_estop_is_latched(stack):
         time.sleep(0.3)
         assert all(m["msg"]["linear"]["x"] == 0.0 for m in received(stack, CMD_VEL)[-5:])
     finally:
-        _post(stack, "/api/robot/estop/release/", stack.tokens["otto"], {"confirm": True})
+        post(stack, "/api/robot/estop/release/", stack.tokens["otto"], {"confirm": True})
 
 
 def test_a_ticket_works_once_and_nothing_else_gets_in(stack):
@@ -162,5 +105,5 @@ def test_a_ticket_works_once_and_nothing_else_gets_in(stack):
 
 def test_a_ticket_needs_a_token_or_a_session(stack):
     with pytest.raises(urllib.error.HTTPError) as refused:
-        _post(stack, "/api/frontdoor/ticket/")
+        post(stack, "/api/frontdoor/ticket/")
     assert refused.value.code in (401, 403)
