@@ -14,6 +14,7 @@ from dashboard.views.account import (
 from dashboard.views.activity import activity
 from dashboard.views.alerts import alerts_page
 from dashboard.views.drive import drive
+from dashboard.views.frontdoor import frontdoor_page
 from dashboard.views.health import healthz
 from dashboard.views.home import home
 from dashboard.views.introspection import diagnostics, statemachine
@@ -41,6 +42,7 @@ urlpatterns = [
     path("map/costmap/<str:layer>/<str:version>/<str:name>.png", costmap_tile, name="costmap-tile"),
     path("drive/", drive, name="drive"),
     path("topics/", topics_page, name="topics"),
+    path("rosbridge-tools/", frontdoor_page, name="frontdoor"),
     path("statemachine/", statemachine, name="statemachine"),
     path("diagnostics/", diagnostics, name="diagnostics"),
     path("video/stream", video_stream, name="video-stream"),

@@ -27,7 +27,7 @@ from robot.link.topicwatch import TopicRefused, local_watches
 from robot.link.watching import WHOLE_PREFIX, whole_key
 from robot.live.fanout import Coalescer
 from robot.live.feed import alocal_hub
-from robot.live.frames import update_fragment
+from robot.live.frames import update_fragment, ws_frame, ws_text_frame
 from robot.live.hub import FrameWriter, Hub, Socket
 from robot.live.state import get_store
 from robot.teleop.driver import Driver
@@ -237,13 +237,15 @@ class Session:
                 self.coalescer.offer(topic, self.rates.get(topic), frame)
 
     async def _write(self, frame: str | bytes) -> None:
-        """One frame, once the client took the previous one (meanwhile its coalescer drops the oldest)."""
-        if self._writer is not None:
-            while (backlog := self._writer.backlog()) > 0:
-                await asyncio.sleep(WRITE_POLL_S)
-            if backlog < 0:
-                return  # closing
-        await self._send(frame)
+        """One frame, once the client took the previous one (meanwhile its coalescer drops the oldest).
+        Under Daphne written straight to the connection, encoded once for every client that gets it."""
+        if self._writer is None:
+            await self._send(frame)
+            return
+        while (backlog := self._writer.backlog()) > 0:
+            await asyncio.sleep(WRITE_POLL_S)
+        if backlog == 0:  # (below: closing)
+            self._writer.write(_encoded(frame))
 
     async def _status(self, level: str, msg: str, id: str | None = None) -> None:
         await self._send(p.status(level, msg, id))
@@ -260,6 +262,21 @@ class Session:
     async def _audit_refusal(self, action: str, params: dict[str, Any], why: str) -> None:
         await writer.record(user=self.user, source="frontdoor", action=action, params=params, ok=False,
                             outcome=why, error_code="forbidden")
+
+
+_frames: dict[int, tuple[str | bytes, bytes]] = {}
+FRAMES_KEPT = 256  # recent frames' encodings (clients paced apart write the same one moments apart)
+
+
+def _encoded(frame: str | bytes) -> bytes:
+    found = _frames.get(id(frame))
+    if found is not None and found[0] is frame:
+        return found[1]
+    data = ws_frame(frame, 0x82) if isinstance(frame, bytes) else ws_text_frame(frame)
+    if len(_frames) >= FRAMES_KEPT:
+        del _frames[next(iter(_frames))]
+    _frames[id(frame)] = (frame, data)
+    return data
 
 
 def _drive_input(msg: Any) -> dict[str, Any]:

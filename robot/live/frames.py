@@ -29,14 +29,18 @@ def batch_frame(fragments: Iterable[str]) -> str:
 def ws_text_frame(text: str) -> bytes:
     """``text`` as one unfragmented, unmasked websocket text frame (RFC 6455, 5.2): what a server
     sends, the same bytes for every connection."""
-    payload = text.encode()
+    return ws_frame(text.encode(), 0x81)
+
+
+def ws_frame(payload: bytes, first: int) -> bytes:
+    """One unmasked websocket frame: ``first`` is 0x81 for text, 0x82 for binary."""
     n = len(payload)
     if n < 126:
-        header = bytes((0x81, n))
+        header = bytes((first, n))
     elif n < 1 << 16:
-        header = bytes((0x81, 126)) + n.to_bytes(2, "big")
+        header = bytes((first, 126)) + n.to_bytes(2, "big")
     else:
-        header = bytes((0x81, 127)) + n.to_bytes(8, "big")
+        header = bytes((first, 127)) + n.to_bytes(8, "big")
     return header + payload
 
 
