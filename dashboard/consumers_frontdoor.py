@@ -15,7 +15,7 @@ from cyborg_site.roles import is_operator
 from dashboard.consumers import UNAUTHENTICATED
 from dashboard.fastdispatch import NoDatabaseHopMixin
 from dashboard.revocation import close_if_revoked
-from history.access import refused_topics
+from history.access import sensitive_topics
 from robot.commands.audit_writer import writer
 from robot.frontdoor.session import Session
 from robot.frontdoor.tickets import ticket_redeem
@@ -25,13 +25,14 @@ from robot.models import FrontDoorAllowance, FrontDoorPace
 from robot.teleop.driving import LockEvent
 
 
-def _configuration() -> tuple[dict[str, float], set[str], set[str]]:
-    """The admin's paces, and allowed topics and services."""
+def _configuration(user: Any) -> tuple[dict[str, float], set[str], set[str], set[str]]:
+    """The admin's paces, allowed topics and services, and the topics this person may not watch:
+    read once, when a tool connects (its subscriptions then cost no database hop each)."""
     paces = dict(FrontDoorPace.objects.values_list("topic", "hz"))
     allowed = list(FrontDoorAllowance.objects.values_list("kind", "name"))
     topics = {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.TOPIC}
     services = {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.SERVICE}
-    return paces, topics, services
+    return paces, topics, services, set() if is_operator(user) else sensitive_topics()
 
 
 class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
@@ -46,11 +47,10 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
             return
         self.scope["user"] = user
         self.scope.pop("session", None)  # the ticket lets in, not a cookie the browser happened to send
-        paces, topics, services = await database_sync_to_async(_configuration)()
-        user_refuses = database_sync_to_async(refused_topics)
+        paces, topics, services, sensitive = await database_sync_to_async(_configuration)(user)
 
         async def refuses(names: list[str]) -> list[str]:
-            return [] if is_operator(user) else await user_refuses(user, names)
+            return [name for name in names if name in sensitive]
 
         writer_ = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.session = Session(user=user, operator=is_operator(user), owner=self.channel_name, send=self._send_frame,

@@ -5,7 +5,7 @@ from django import forms
 from django.contrib import admin
 from django.http import HttpRequest
 
-from robot.models import AuditEntry, DomeMode, EmotionPreset, Location, SoundClip
+from robot.models import AuditEntry, DomeMode, EmotionPreset, FrontDoorAllowance, FrontDoorPace, Location, SoundClip
 
 
 @admin.register(AuditEntry)
@@ -32,6 +32,21 @@ class EmotionPresetAdmin(admin.ModelAdmin):
 @admin.register(SoundClip)
 class SoundClipAdmin(admin.ModelAdmin):
     list_display = ("name", "label", "description")
+
+
+@admin.register(FrontDoorAllowance)
+class FrontDoorAllowanceAdmin(admin.ModelAdmin):
+    """What ROS tools' operators may further publish or call (read when a tool connects)."""
+
+    list_display = ("kind", "name")
+    list_filter = ("kind",)
+
+
+@admin.register(FrontDoorPace)
+class FrontDoorPaceAdmin(admin.ModelAdmin):
+    """How often a tool asking no throttle gets a topic (read when a tool connects)."""
+
+    list_display = ("topic", "hz")
 
 
 @admin.register(DomeMode)

@@ -10,6 +10,7 @@ topic's front-door pace; a slow client's oldest messages go, nobody else waits f
 from __future__ import annotations
 
 import asyncio
+import itertools
 import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -85,6 +86,8 @@ class Session:
         self.subs: dict[str, dict[str | None, p.Subscribe]] = {}  # topic -> subscription id -> options
         self.rates: dict[str, float | None] = {}
         self.compression: dict[str, str] = {}  # topic -> none | cbor | cbor-raw (its latest subscription's)
+        self.fragment_size: dict[str, int] = {}  # topic -> the largest text frame before it goes in fragments
+        self._fragments = itertools.count()
         self.advertised: dict[str, str] = {}
         self.driver = Driver(user=user, owner=owner, can_drive=operator, send=self._driver_said)
         self.hub: Hub | None = None
@@ -135,6 +138,11 @@ class Session:
         first = sub.topic not in self.subs
         self.subs.setdefault(sub.topic, {})[sub.id] = sub
         self.compression[sub.topic] = sub.compression
+        sizes = [s.fragment_size for s in self.subs[sub.topic].values() if s.fragment_size]
+        if sizes:
+            self.fragment_size[sub.topic] = min(sizes)
+        else:
+            self.fragment_size.pop(sub.topic, None)
         self._set_rate(sub.topic)
         if not first:
             return
@@ -167,6 +175,7 @@ class Session:
             return
         del self.subs[topic]
         self.compression.pop(topic, None)
+        self.fragment_size.pop(topic, None)
         assert self.hub is not None
         self.hub.unwatch(self.socket, [whole_key(topic)])
         await local_watches().unwatch(self.socket, topic, whole=True)
@@ -233,12 +242,20 @@ class Session:
             compression = self.compression.get(topic, "none")
             frame = p.publish_from_fragment(topic, fragment) if compression == "none" else \
                 encoding.frame(topic, fragment, compression)
-            if frame is not None:
+            size = self.fragment_size.get(topic)
+            if size and isinstance(frame, str) and len(frame) > size:
+                self.coalescer.offer(topic, self.rates.get(topic),
+                                     tuple(p.fragments(frame, size, f"{topic}:{next(self._fragments)}")))
+            elif frame is not None:
                 self.coalescer.offer(topic, self.rates.get(topic), frame)
 
-    async def _write(self, frame: str | bytes) -> None:
+    async def _write(self, frame: str | bytes | tuple[str, ...]) -> None:
         """One frame, once the client took the previous one (meanwhile its coalescer drops the oldest).
         Under Daphne written straight to the connection, encoded once for every client that gets it."""
+        if isinstance(frame, tuple):  # a message in fragments
+            for part in frame:
+                await self._write(part)
+            return
         if self._writer is None:
             await self._send(frame)
             return
