@@ -31,6 +31,7 @@ from robot import interface as ri
 from robot.link.connection import RobotLink, one_per_link, register_start
 from robot.link.holders import Leases
 from robot.link.serving import register_operation
+from robot.live import feed
 from robot.live.announce import aannounce
 from robot.live.fanout import Coalescer
 from robot.live.groups import LinkReply, LinkRequest, TopicUpdate
@@ -211,8 +212,11 @@ class Watches:
     async def _send(self, update: TopicUpdate) -> None:
         event = dict(update)
         if update["key"].startswith(WHOLE_PREFIX):
-            # Kept for a later subscriber's first message (a latched topic's only one), unless bulky.
-            await aannounce(update["key"], event, keep=not _bulky(update["msg"]), store=self.link.store)
+            # Sent first (a tool's latency is the store's round trip shorter), then kept for a later
+            # subscriber's first message (a latched topic's only one), unless bulky.
+            await feed.announce(event)
+            if not _bulky(update["msg"]):
+                await self.link.store.aput(update["key"], event)
             return
         event["msg"] = summarise(update["msg"])
         await aannounce(update["key"], event, store=self.link.store)

@@ -154,3 +154,20 @@ async def test_speech_through_the_front_door_is_the_pages_command(link, sim, ope
     answer = await frame_where(watcher, lambda f: f.get("op") == "service_response")
     assert answer["result"] is False and answer["id"] == "m" and "viewers" in answer["values"]
     await watcher.disconnect()
+
+
+async def test_a_client_asking_fragments_gets_each_message_in_fragments_it_can_join(link, viewer):
+    topic = ri.topic("odom").name
+    communicator, _ = await door(viewer)
+    await communicator.send_json_to({"op": "subscribe", "topic": topic, "fragment_size": 100, "id": "s"})
+    first = await frame_where(communicator, lambda f: f.get("op") == "fragment" and f["num"] == 0)
+    parts = [first] + [await frame_where(communicator, lambda f: f.get("op") == "fragment")
+                       for _ in range(first["total"] - 1)]
+    assert [part["num"] for part in parts] == list(range(first["total"])) and {p["id"] for p in parts} == {first["id"]}
+    message = json.loads("".join(part["data"] for part in parts))
+    assert message["op"] == "publish" and message["topic"] == topic and "pose" in message["msg"]
+    await communicator.send_json_to({"op": "unsubscribe", "topic": topic, "id": "s"})
+    await communicator.send_json_to({"op": "subscribe", "topic": "not a name", "id": "bad"})
+    refused = await frame_where(communicator, lambda f: f.get("op") == "status")
+    assert refused["id"] == "bad" and refused["level"] == "error"
+    await communicator.disconnect()
