@@ -171,3 +171,9 @@ async def test_a_client_asking_fragments_gets_each_message_in_fragments_it_can_j
     refused = await frame_where(communicator, lambda f: f.get("op") == "status")
     assert refused["id"] == "bad" and refused["level"] == "error"
     await communicator.disconnect()
+
+
+def test_the_connect_page_loads_roslibjs_and_its_script_for_anyone_signed_in(client, viewer):
+    client.force_login(viewer)
+    page = client.get("/rosbridge-tools/").content.decode()
+    assert "vendor/roslib/roslib.min.js" in page and "js/frontdoor.js" in page and "/api/frontdoor/ticket/" in page
