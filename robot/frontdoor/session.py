@@ -39,6 +39,9 @@ log = logging.getLogger(__name__)
 Send = Callable[[str | bytes], Awaitable[None]]
 Refuses = Callable[[list[str]], Awaitable[list[str]]]  # the topics of these this person may not watch
 WRITE_POLL_S = 0.005
+# A client whose connection holds more than this not yet taken by the kernel gets nothing more until it
+# has: its coalescer keeps the newest of each paced topic and drops the oldest of the rest meanwhile.
+MAX_UNSENT = 64 * 1024
 MAX_BACKLOG = 1000  # per client: every-message updates kept while it is slow (oldest dropped)
 
 
@@ -259,9 +262,9 @@ class Session:
         if self._writer is None:
             await self._send(frame)
             return
-        while (backlog := self._writer.backlog()) > 0:
+        while (backlog := self._writer.backlog()) > MAX_UNSENT:
             await asyncio.sleep(WRITE_POLL_S)
-        if backlog == 0:  # (below: closing)
+        if backlog >= 0:  # (below: closing)
             self._writer.write(_encoded(frame))
 
     async def _status(self, level: str, msg: str, id: str | None = None) -> None:
