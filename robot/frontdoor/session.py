@@ -91,6 +91,7 @@ class Session:
         self.compression: dict[str, str] = {}  # topic -> none | cbor | cbor-raw (its latest subscription's)
         self.fragment_size: dict[str, int] = {}  # topic -> the largest text frame before it goes in fragments
         self._fragments = itertools.count()
+        self._waiting = False  # a frame waits for the client to take what it has (the order holds)
         self.advertised: dict[str, str] = {}
         self.driver = Driver(user=user, owner=owner, can_drive=operator, send=self._driver_said)
         self.hub: Hub | None = None
@@ -100,7 +101,8 @@ class Session:
     async def start(self) -> None:
         self.hub = await alocal_hub()
         self.hub.add(self.socket)
-        self.coalescer = Coalescer(self._write, loop=asyncio.get_running_loop(), max_backlog=MAX_BACKLOG)
+        self.coalescer = Coalescer(self._write, loop=asyncio.get_running_loop(), max_backlog=MAX_BACKLOG,
+                                   write_now=self._write_now)
 
     async def close(self) -> None:
         if self.hub is not None:
@@ -262,10 +264,25 @@ class Session:
         if self._writer is None:
             await self._send(frame)
             return
-        while (backlog := self._writer.backlog()) > MAX_UNSENT:
-            await asyncio.sleep(WRITE_POLL_S)
+        self._waiting = True
+        try:
+            while (backlog := self._writer.backlog()) > MAX_UNSENT:
+                await asyncio.sleep(WRITE_POLL_S)
+        finally:
+            self._waiting = False
         if backlog >= 0:  # (below: closing)
             self._writer.write(_encoded(frame))
+
+    def _write_now(self, frame: str | bytes | tuple[str, ...]) -> bool:
+        """Under Daphne, a frame nothing waits before goes out in the hub's own turn (no task switch)."""
+        if self._writer is None or self._waiting or isinstance(frame, tuple):
+            return False
+        backlog = self._writer.backlog()
+        if backlog > MAX_UNSENT:
+            return False
+        if backlog >= 0:
+            self._writer.write(_encoded(frame))
+        return True
 
     async def _status(self, level: str, msg: str, id: str | None = None) -> None:
         await self._send(p.status(level, msg, id))

@@ -21,6 +21,8 @@ from robot.supervisor import spawn
 log = logging.getLogger(__name__)
 
 Send = Callable[[Any], Awaitable[None]]
+# Takes a value at once if it can (True), without waiting: the outbox is then skipped.
+WriteNow = Callable[[Any], bool]
 
 # A coalesced topic's message goes at once when it is the first of its period: it arrived at least
 # 1 - JITTER_SLACK of a period after the previous one (a topic published at its UI rate, give or
@@ -32,8 +34,10 @@ JITTER_SLACK = 0.2
 
 
 class Coalescer:
-    def __init__(self, send: Send, *, loop: asyncio.AbstractEventLoop, max_backlog: int = 5000) -> None:
+    def __init__(self, send: Send, *, loop: asyncio.AbstractEventLoop, max_backlog: int = 5000,
+                 write_now: WriteNow | None = None) -> None:
         self._send = send
+        self._write_now = write_now
         self._loop = loop
         self._max_backlog = max_backlog
         self._outbox: OrderedDict[Any, Any] = OrderedDict()
@@ -84,6 +88,8 @@ class Coalescer:
         self._enqueue(key, value)
 
     def _enqueue(self, slot: Any, value: Any) -> None:
+        if not self._outbox and self._write_now is not None and self._write_now(value):
+            return  # nothing queued before it: no task switch on the way out
         if len(self._outbox) >= self._max_backlog and slot not in self._outbox:
             self._outbox.popitem(last=False)
             self.dropped += 1
