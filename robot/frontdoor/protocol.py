@@ -133,11 +133,6 @@ def publish_from_fragment(topic: str, fragment: str) -> str:
     return frame
 
 
-def message_of(fragment: str) -> Any:
-    """The message inside a hub fragment (decoded: for a client that takes CBOR)."""
-    return json.loads(fragment)["msg"]
-
-
 def fragments(frame: str, size: int, id: str) -> list[str]:
     """``frame`` cut into rosbridge ``fragment`` frames of at most ``size`` characters of data."""
     parts = [frame[i:i + size] for i in range(0, len(frame), size)] or [""]
