@@ -15,6 +15,7 @@ import cbor2
 from robot.frontdoor.rawtypes import Serializer, Unknown
 from robot.frontdoor.rules import Refused
 from robot.link.bus import arequest
+from robot.live.frames import ws_frame, ws_text_frame
 
 log = logging.getLogger(__name__)
 
@@ -67,3 +68,19 @@ def _make(topic: str, update: dict[str, Any], compression: str) -> bytes:
     raw = serializer.serialize(serializer.topics[topic], msg)
     return cbor2.dumps({"op": "publish", "topic": topic, "msg": {"secs": secs, "nsecs": int((t - secs) * 1e9),
                                                                    "bytes": raw}})
+
+
+_frames: dict[int, tuple[str | bytes, bytes]] = {}
+FRAMES_KEPT = 256  # recent frames' encodings (clients paced apart write the same one moments apart)
+
+
+def encoded(frame: str | bytes) -> bytes:
+    """``frame`` as a websocket frame (text, or binary for CBOR), encoded once for every client."""
+    found = _frames.get(id(frame))
+    if found is not None and found[0] is frame:
+        return found[1]
+    data = ws_frame(frame, 0x82) if isinstance(frame, bytes) else ws_text_frame(frame)
+    if len(_frames) >= FRAMES_KEPT:
+        del _frames[next(iter(_frames))]
+    _frames[id(frame)] = (frame, data)
+    return data

@@ -17,7 +17,9 @@ from robot.commands.modes import change_mode
 from robot.commands.motors import set_motors
 from robot.commands.pipeline import Command
 from robot.commands.tool import STRING_COMMANDS, string_command
+from robot.frontdoor.protocol import finite
 from robot.link import bus
+from robot.teleop.twist import server_limits
 
 # rosapi's services that only read (its parameter writes stay with the robot's own tools).
 ROSAPI_READ_ONLY = frozenset({
@@ -101,3 +103,18 @@ def call_command(*, service: str, service_type: str | None, args: dict[str, Any]
         return command
     raise Refused(f"Calling {service} is not allowed through the front door (rosapi's read-only services, "
                   "the motor services, and what an admin allows).")
+
+
+def drive_input(msg: Any) -> dict[str, Any]:
+    """A ``geometry_msgs/Twist`` as the drive page's input: forward speed and turn rate as fractions of
+    the server's limits (which cap them), so the same clamps, lock, deadman and latch apply."""
+    if not isinstance(msg, dict):
+        raise Refused("msg must be a geometry_msgs/Twist object", "invalid")
+    linear, angular = msg.get("linear") or {}, msg.get("angular") or {}
+    if not isinstance(linear, dict) or not isinstance(angular, dict):
+        raise Refused("msg must be a geometry_msgs/Twist object", "invalid")
+    x = finite(linear.get("x", 0.0), "linear.x")
+    z = finite(angular.get("z", 0.0), "angular.z")
+    limits = server_limits()
+    return {"type": "input", "linear": x / limits.linear if limits.linear else 0.0,
+            "angular": z / limits.angular if limits.angular else 0.0}

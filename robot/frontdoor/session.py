@@ -22,17 +22,16 @@ from robot.commands.audit_writer import writer
 from robot.commands.pipeline import arun
 from robot.frontdoor import encoding
 from robot.frontdoor import protocol as p
-from robot.frontdoor.rules import Refused, call_command, is_cmd_vel, publish_command, rosapi_type
+from robot.frontdoor.rules import Refused, call_command, drive_input, is_cmd_vel, publish_command, rosapi_type
 from robot.link.bus import RobotError, arequest
 from robot.link.topicwatch import TopicRefused, local_watches
 from robot.link.watching import WHOLE_PREFIX, whole_key
 from robot.live.fanout import Coalescer
 from robot.live.feed import alocal_hub
-from robot.live.frames import update_fragment, ws_frame, ws_text_frame
+from robot.live.frames import update_fragment
 from robot.live.hub import FrameWriter, Hub, Socket
 from robot.live.state import get_store
 from robot.teleop.driver import Driver
-from robot.teleop.twist import server_limits
 
 log = logging.getLogger(__name__)
 
@@ -207,7 +206,7 @@ class Session:
             await self._audit_refusal("frontdoor.publish", {"topic": topic}, "viewers may not publish")
             raise Refused("viewers may not publish (operators and admins can)")
         if is_cmd_vel(topic):
-            await self.driver.handle(_drive_input(msg))
+            await self.driver.handle(drive_input(msg))
             return
         command = publish_command(user=self.user, topic=topic, msg_type=self.advertised.get(topic), msg=msg,
                                   allowed=self.allowed_topics)
@@ -271,7 +270,7 @@ class Session:
         finally:
             self._waiting = False
         if backlog >= 0:  # (below: closing)
-            self._writer.write(_encoded(frame))
+            self._writer.write(encoding.encoded(frame))
 
     def _write_now(self, frame: str | bytes | tuple[str, ...]) -> bool:
         """Under Daphne, a frame nothing waits before goes out in the hub's own turn (no task switch)."""
@@ -281,7 +280,7 @@ class Session:
         if backlog > MAX_UNSENT:
             return False
         if backlog >= 0:
-            self._writer.write(_encoded(frame))
+            self._writer.write(encoding.encoded(frame))
         return True
 
     async def _status(self, level: str, msg: str, id: str | None = None) -> None:
@@ -299,33 +298,3 @@ class Session:
     async def _audit_refusal(self, action: str, params: dict[str, Any], why: str) -> None:
         await writer.record(user=self.user, source="frontdoor", action=action, params=params, ok=False,
                             outcome=why, error_code="forbidden")
-
-
-_frames: dict[int, tuple[str | bytes, bytes]] = {}
-FRAMES_KEPT = 256  # recent frames' encodings (clients paced apart write the same one moments apart)
-
-
-def _encoded(frame: str | bytes) -> bytes:
-    found = _frames.get(id(frame))
-    if found is not None and found[0] is frame:
-        return found[1]
-    data = ws_frame(frame, 0x82) if isinstance(frame, bytes) else ws_text_frame(frame)
-    if len(_frames) >= FRAMES_KEPT:
-        del _frames[next(iter(_frames))]
-    _frames[id(frame)] = (frame, data)
-    return data
-
-
-def _drive_input(msg: Any) -> dict[str, Any]:
-    """A ``geometry_msgs/Twist`` as the drive page's input: forward speed and turn rate as fractions of
-    the server's limits (which cap them), so the same clamps, lock, deadman and latch apply."""
-    if not isinstance(msg, dict):
-        raise p.BadFrame("msg must be a geometry_msgs/Twist object")
-    linear, angular = msg.get("linear") or {}, msg.get("angular") or {}
-    if not isinstance(linear, dict) or not isinstance(angular, dict):
-        raise p.BadFrame("msg must be a geometry_msgs/Twist object")
-    x = p.finite(linear.get("x", 0.0), "linear.x")
-    z = p.finite(angular.get("z", 0.0), "angular.z")
-    limits = server_limits()
-    return {"type": "input", "linear": x / limits.linear if limits.linear else 0.0,
-            "angular": z / limits.angular if limits.angular else 0.0}
