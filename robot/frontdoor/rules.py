@@ -1,10 +1,11 @@
 """What a person may publish or call through the front door, as the product's own commands.
 
 Nothing a tool sends goes to the robot as it came: velocity goes through the drive rules (the
-session's ``Driver``); the robot's command topics (events, speech, emotion, sound, dome, mode) and
-motor services become the same ``Command`` the pages run, through the pipeline's role check, input
-check, E-STOP gate and audit; an admin's allowlist (``FrontDoorAllowance``) adds further names, run
-as ``frontdoor.publish``/``frontdoor.call``. rosapi's read-only services answer anyone signed in.
+session's ``Driver``); the robot's command topics (events, speech, emotion, sound, dome, mode, a
+navigation goal on ``/move_base_simple/goal``, ``/initialpose``) and motor services become the
+same ``Command`` the pages run, through the pipeline's role check, input check, E-STOP gate and
+audit; an admin's allowlist (``FrontDoorAllowance``) adds further names, run as
+``frontdoor.publish``/``frontdoor.call``. rosapi's read-only services answer anyone signed in.
 Everything else is refused with a reason.
 """
 
@@ -19,6 +20,8 @@ from robot.commands.pipeline import Command
 from robot.commands.tool import STRING_COMMANDS, string_command
 from robot.frontdoor.protocol import finite
 from robot.link import bus
+from robot.navigation.goals import goal_send, initial_pose_set
+from robot.navigation.transforms import quaternion_to_yaw
 from robot.teleop.twist import server_limits
 
 # rosapi's services that only read (its parameter writes stay with the robot's own tools).
@@ -73,6 +76,9 @@ def publish_command(*, user: Any, topic: str, msg_type: str | None, msg: Any, al
         except ValueError:
             mode = data  # the command's check names the modes there are
         return change_mode(mode, user=user)
+    for key, build in (("move_base_simple_goal", goal_send), ("initialpose", _initial_pose)):
+        if topic == ri.topic(key).name:
+            return build(user=user, data=_planar_pose(msg, nested=key == "initialpose"))
     if topic in allowed:
         if not msg_type:
             raise Refused(f"advertise {topic} with its type before publishing on it", "invalid")
@@ -85,7 +91,32 @@ def publish_command(*, user: Any, topic: str, msg_type: str | None, msg: Any, al
 
         return Command("frontdoor.publish", {"topic": topic, "type": msg_type}, send)
     raise Refused(f"Publishing on {topic} is not allowed through the front door (velocity on "
-                  f"{ri.topic('cmd_vel').name}, the robot's command topics, and what an admin allows).")
+                  f"{ri.topic('cmd_vel').name}, the robot's command topics, navigation goals on "
+                  f"{ri.topic('move_base_simple_goal').name}, and what an admin allows).")
+
+
+def _initial_pose(*, user: Any, data: dict[str, Any]) -> Command:
+    return initial_pose_set(data=data)
+
+
+def _planar_pose(msg: Any, *, nested: bool) -> dict[str, Any]:
+    """A ``PoseStamped`` (``PoseWithCovarianceStamped`` when ``nested``) in the map frame as the
+    navigation commands' ``{x, y, yaw}``; they check it against the map."""
+    if not isinstance(msg, dict) or not isinstance(msg.get("pose"), dict):
+        raise Refused("msg must be a pose message with a pose", "invalid")
+    pose = msg["pose"].get("pose") if nested else msg["pose"]
+    header = msg.get("header")
+    frame = header.get("frame_id", "") if isinstance(header, dict) else ""
+    if frame not in ("", "map", "/map"):
+        raise Refused(f"poses are taken in the map frame, not {frame!r}", "invalid")
+    if not isinstance(pose, dict) or not isinstance(pose.get("position"), dict):
+        raise Refused("msg must be a pose message with a position", "invalid")
+    given = pose.get("orientation")
+    orientation: dict[str, Any] = given if isinstance(given, dict) else {"w": 1.0}
+    position: dict[str, Any] = pose["position"]
+    return {"x": finite(position.get("x", 0.0), "position.x"), "y": finite(position.get("y", 0.0), "position.y"),
+            "yaw": quaternion_to_yaw({k: finite(orientation.get(k, 0.0), f"orientation.{k}")
+                                      for k in ("x", "y", "z", "w")})}
 
 
 def call_command(*, service: str, service_type: str | None, args: dict[str, Any], allowed: set[str]) -> Command:

@@ -177,3 +177,23 @@ def test_the_connect_page_loads_roslibjs_and_its_script_for_anyone_signed_in(cli
     client.force_login(viewer)
     page = client.get("/rosbridge-tools/").content.decode()
     assert "vendor/roslib/roslib.min.js" in page and "js/frontdoor.js" in page and "/api/frontdoor/ticket/" in page
+
+
+async def test_a_navigation_goal_from_a_tool_is_the_pages_goal_command(link, sim, operator):
+    goal_topic = ri.action_topic("move_base", "goal")[0]
+    here = (await asyncio.to_thread(sim.snapshot))["state"]["pose"]
+    communicator, _ = await door(operator)
+    await asyncio.sleep(1.0)  # the map has arrived at the link (goals are checked against it)
+    await communicator.send_json_to({"op": "publish", "topic": ri.topic("move_base_simple_goal").name, "msg": {
+        "header": {"frame_id": "map"},
+        "pose": {"position": {"x": here["x"], "y": here["y"], "z": 0.0},
+                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}})
+    for _ in range(200):
+        if sim.received(goal_topic):
+            break
+        await asyncio.sleep(0.05)
+    goal = sim.received(goal_topic)[-1]["goal"]["target_pose"]["pose"]["position"]
+    assert (goal["x"], goal["y"]) == pytest.approx((here["x"], here["y"]), abs=1e-6)
+    entry = await database_sync_to_async(AuditEntry.objects.filter(action="navigation.goal").get)()
+    assert entry.source == "frontdoor" and entry.ok, entry.outcome
+    await communicator.disconnect()
