@@ -150,3 +150,71 @@ def test_the_simulator_serves_cbor_raw_like_the_real_server(stack):
     definitions, frames = foxglove_session(url, topics, WINDOW_S)
     reference.join()
     check(definitions, frames, robot)
+
+
+ROS2_ODOMETRY = """std_msgs/Header header
+string child_frame_id
+geometry_msgs/PoseWithCovariance pose
+geometry_msgs/TwistWithCovariance twist
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: geometry_msgs/PoseWithCovariance
+geometry_msgs/Pose pose
+float64[36] covariance
+================================================================================
+MSG: geometry_msgs/Pose
+geometry_msgs/Point position
+geometry_msgs/Quaternion orientation
+================================================================================
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z
+================================================================================
+MSG: geometry_msgs/Quaternion
+float64 x
+float64 y
+float64 z
+float64 w
+================================================================================
+MSG: geometry_msgs/TwistWithCovariance
+geometry_msgs/Twist twist
+float64[36] covariance
+================================================================================
+MSG: geometry_msgs/Twist
+geometry_msgs/Vector3 linear
+geometry_msgs/Vector3 angular
+================================================================================
+MSG: geometry_msgs/Vector3
+float64 x
+float64 y
+float64 z
+"""
+
+
+def test_a_ros2_robots_messages_are_cdr_that_foxglove_reads():
+    from robot.frontdoor.rawtypes import Serializer
+
+    serializer = Serializer()
+    serializer.learn(["/odom"], ["nav_msgs/msg/Odometry"], [ROS2_ODOMETRY])
+    sent = {"header": {"stamp": {"sec": 1700000000, "nanosec": 5}, "frame_id": "odom"}, "child_frame_id": "base_link",
+            "pose": {"pose": {"position": {"x": 1.5, "y": -2.0, "z": 0.0},
+                              "orientation": {"x": 0.0, "y": 0.0, "z": 0.5, "w": 0.75}},
+                     "covariance": [0.1 * i for i in range(36)]},
+            "twist": {"twist": {"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": None}},
+                      "covariance": [0.0] * 36}}
+    raw = serializer.serialize("nav_msgs/msg/Odometry", sent)
+    [decoded] = decode(2, [{"type": "nav_msgs/msg/Odometry", "definition": ROS2_ODOMETRY,
+                            "bytes_b64": base64.b64encode(raw).decode()}])
+    assert decoded["header"]["stamp"] == {"sec": 1700000000, "nanosec": 5}
+    assert decoded["header"]["frame_id"] == "odom" and decoded["child_frame_id"] == "base_link"
+    assert decoded["pose"]["pose"]["position"] == {"x": 1.5, "y": -2.0, "z": 0.0}
+    assert decoded["pose"]["covariance"] == pytest.approx([0.1 * i for i in range(36)])
+    assert decoded["twist"]["twist"]["linear"]["x"] == 0.3 and decoded["twist"]["twist"]["angular"]["z"] is None
