@@ -61,19 +61,25 @@ run: install
 	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT), server talks to $(ROSBRIDGE_URL); open http://127.0.0.1:$(PORT)/"
 	@bash scripts/run.sh '$(BIN)' '$(PORT)' '$(SIM_PORT)' '$(VIDEO_PORT)' '$(ROSBRIDGE_URL)' '$(VIDEO_URL)'
 
-test: install browser nginx
+# Foxglove's own message decoders, for the front door's tests (test-only, pinned by their lock file).
+FOXGLOVE := tests/frontdoor/foxglove
+$(FOXGLOVE)/node_modules/.installed: $(FOXGLOVE)/package-lock.json
+	npm ci --prefix $(FOXGLOVE) --no-audit --no-fund --loglevel=error
+	touch $@
+
+test: install browser nginx $(FOXGLOVE)/node_modules/.installed
 	bash scripts/test.sh
 
 # While working: the tests a change touched (pytest-testmon: it remembers which code each test ran, in
 # .testmondata; the first run, with none yet, runs them all; -m would switch its selection off without
 # --testmon-forceselect). Embedded wiring, neither the browser nor
 # the topology tests; make test stays the whole suite.
-test-quick: install
+test-quick: install $(FOXGLOVE)/node_modules/.installed
 	env -u REDIS_URL -u DATABASE_URL $(BIN)/python -m pytest --testmon --testmon-forceselect -m "not browser and not stack" -n 2 -q $(ARGS)
 
 # The suite N times (make test-repeat N=5): which tests ever failed, and how often.
 N ?= 5
-test-repeat: install browser nginx
+test-repeat: install browser nginx $(FOXGLOVE)/node_modules/.installed
 	bash scripts/test_repeat.sh $(N)
 
 lint: install

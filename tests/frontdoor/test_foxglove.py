@@ -23,8 +23,15 @@ from robot import interface as ri
 from tests.frontdoor.conftest import ticket_url
 
 FOXGLOVE = Path(__file__).parent / "foxglove"
-pytestmark = pytest.mark.skipif(shutil.which("node") is None or not (FOXGLOVE / "node_modules").is_dir(),
-                                reason="Node and tests/frontdoor/foxglove/node_modules (npm install there)")
+
+
+@pytest.fixture(autouse=True)
+def _decoders_installed():
+    if shutil.which("node") is None or not (FOXGLOVE / "node_modules").is_dir():
+        pytest.fail("Foxglove's decoders are not installed: make test installs them (npm ci in "
+                    "tests/frontdoor/foxglove)")
+
+
 ODOM, BATTERY, SCAN = ri.topic("odom").name, ri.topic("battery_soc").name, ri.topic("scan").name
 WINDOW_S = 4.0
 
