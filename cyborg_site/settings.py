@@ -270,6 +270,8 @@ VIDEO_TOPIC = env_str("VIDEO_TOPIC", "/videostream")
 # Camera streams one web process serves at once: per person, and in all.
 CAMERA_STREAMS_PER_PERSON = env_int("CAMERA_STREAMS_PER_PERSON", 3, minimum=1)
 CAMERA_STREAMS_TOTAL = env_int("CAMERA_STREAMS_TOTAL", 50, minimum=1)
+# Which ROS the robot runs: 1, 2, or auto (the link asks /rosapi/get_ros_version, which only ROS 2 serves).
+ROBOT_ROS = env_str("ROBOT_ROS", "auto")
 # Re-wiring: {"topics": {"cmd_vel": "/RosAria/cmd_vel"}, "services": {...}, "actions": {...}}
 _names = env_json_dict("ROBOT_NAME_OVERRIDES")
 ROBOT_TOPICS: dict[str, str] = _names.get("topics", {})

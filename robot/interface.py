@@ -131,13 +131,105 @@ _DEFAULT_ACTIONS: tuple[Action, ...] = (
 )
 
 
-def _overrides(setting: str) -> dict[str, str]:
+# --- ROS 2 (Jazzy, Nav2) ------------------------------------------------------------------
+# The same keys on a ROS 2 robot (ROBOT_INTERFACE.md, "ROS 2 robots"): every type spelled in three
+# parts, and these names and types where Nav2 and rcl differ from the ROS 1 robot by more than that.
+ROS1, ROS2 = 1, 2
+ROS_VERSIONS = (ROS1, ROS2)
+_ROS2_TOPICS: dict[str, tuple[str, str]] = {
+    "plan": ("/plan", "nav_msgs/msg/Path"),
+    "move_base_status": ("/navigate_to_pose/_action/status", "action_msgs/msg/GoalStatusArray"),
+    "global_costmap": ("/global_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
+    "local_costmap": ("/local_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
+    "global_costmap_updates": ("/global_costmap/costmap_updates", "map_msgs/msg/OccupancyGridUpdate"),
+    "local_costmap_updates": ("/local_costmap/costmap_updates", "map_msgs/msg/OccupancyGridUpdate"),
+    "particlecloud": ("/particle_cloud", "nav2_msgs/msg/ParticleCloud"),
+    "footprint": ("/global_costmap/published_footprint", "geometry_msgs/msg/PolygonStamped"),
+    "local_plan": ("/local_plan", "nav_msgs/msg/Path"),
+    "rosout": ("/rosout", "rcl_interfaces/msg/Log"),
+    "move_base_simple_goal": ("/goal_pose", "geometry_msgs/msg/PoseStamped"),
+}
+_ROS2_ACTIONS: dict[str, tuple[str, str]] = {
+    "move_base": ("/navigate_to_pose", "nav2_msgs/action/NavigateToPose"),
+}
+# Where a ROS 2 action server's goal status and cancel-everything service live.
+ACTION_STATUS_SUFFIX = "/_action/status"
+ACTION_CANCEL_SUFFIX = "/_action/cancel_goal"
+ACTION_STATUS_TYPE = "action_msgs/msg/GoalStatusArray"
+ACTION_CANCEL_TYPE = "action_msgs/srv/CancelGoal"
+
+
+def ros2_spelling(type_name: str, kind: str = "msg") -> str:
+    """``pkg/Type`` as ROS 2 spells it (``pkg/msg/Type``); a three-part name is kept."""
+    package, _, name = type_name.partition("/")
+    if "/" in name or not name:
+        return type_name
+    if kind == "srv" and package == "rosapi":
+        package = "rosapi_msgs"
+    return f"{package}/{kind}/{name}"
+
+
+def ros1_spelling(type_name: str) -> str:
+    """``pkg/msg/Type`` (or ``srv``, ``action``) as ROS 1 spells it: ``pkg/Type``."""
+    parts = type_name.split("/")
+    return f"{parts[0]}/{parts[2]}" if len(parts) == 3 and parts[1] in ("msg", "srv", "action") else type_name
+
+
+def _ros2_defaults[Named: (Topic, Service, Action)](defaults: tuple[Named, ...], kind: str,
+                                                     table: dict[str, tuple[str, str]]) -> tuple[Named, ...]:
+    out = []
+    for d in defaults:
+        name, type_name = table.get(d.key, (d.name, ros2_spelling(d.type, kind)))
+        out.append(replace(d, name=name, type=type_name))
+    return tuple(out)
+
+
+def _defaults(ros: int) -> tuple[tuple[Topic, ...], tuple[Service, ...], tuple[Action, ...]]:
+    if ros == ROS2:
+        return (_ros2_defaults(_DEFAULT_TOPICS, "msg", _ROS2_TOPICS),
+                _ros2_defaults(_DEFAULT_SERVICES, "srv", {}),
+                _ros2_defaults(_DEFAULT_ACTIONS, "action", _ROS2_ACTIONS))
+    return _DEFAULT_TOPICS, _DEFAULT_SERVICES, _DEFAULT_ACTIONS
+
+
+_active_ros: int | None = None
+
+
+def use_ros(version: int | None) -> None:
+    """Make ``version`` the ROS whose names this process uses (the link, once it has found out which
+    ROS the robot runs; None: back to the ``ROBOT_ROS`` setting)."""
+    global _active_ros
+    if version is not None and version not in ROS_VERSIONS:
+        raise ValueError(f"ROS version is 1 or 2, not {version!r}")
+    _active_ros = version
+
+
+def configured_ros() -> int | None:
+    """The ROS version the ``ROBOT_ROS`` setting forces (1 or 2), or None to find out from the robot."""
+    value = str(_setting("ROBOT_ROS", "") or "auto").strip().lower()
+    if value in ("", "auto"):
+        return None
+    if value not in ("1", "2"):
+        raise ValueError(f"ROBOT_ROS is 1, 2 or auto, not {value!r}")
+    return int(value)
+
+
+def ros_version() -> int:
+    """The ROS whose names and types this process uses: found out, else forced, else ROS 1."""
+    return _active_ros or configured_ros() or ROS1
+
+
+def _setting(name: str, default: object) -> object:
     try:
         from django.conf import settings
 
-        return dict(getattr(settings, setting, {}) or {})
+        return getattr(settings, name, default)
     except Exception:  # Django not configured: plain defaults (simulator scripts, benches)
-        return {}
+        return default
+
+
+def _overrides(setting: str) -> dict[str, str]:
+    return dict(_setting(setting, {}) or {})  # type: ignore[call-overload]
 
 
 def _apply[Named: (Topic, Service, Action)](defaults: tuple[Named, ...], setting: str) -> dict[str, Named]:
@@ -149,18 +241,18 @@ def _apply[Named: (Topic, Service, Action)](defaults: tuple[Named, ...], setting
 
 
 @cache
-def _topics() -> dict[str, Topic]:
-    return _apply(_DEFAULT_TOPICS, "ROBOT_TOPICS")
+def _topics(ros: int) -> dict[str, Topic]:
+    return _apply(_defaults(ros)[0], "ROBOT_TOPICS")
 
 
 @cache
-def _services() -> dict[str, Service]:
-    return _apply(_DEFAULT_SERVICES, "ROBOT_SERVICES")
+def _services(ros: int) -> dict[str, Service]:
+    return _apply(_defaults(ros)[1], "ROBOT_SERVICES")
 
 
 @cache
-def _actions() -> dict[str, Action]:
-    return _apply(_DEFAULT_ACTIONS, "ROBOT_ACTIONS")
+def _actions(ros: int) -> dict[str, Action]:
+    return _apply(_defaults(ros)[2], "ROBOT_ACTIONS")
 
 
 def reload() -> None:
@@ -169,20 +261,20 @@ def reload() -> None:
         f.cache_clear()
 
 
-def topic(key: str) -> Topic:
-    return _topics()[key]
+def topic(key: str, ros: int | None = None) -> Topic:
+    return _topics(ros or ros_version())[key]
 
 
-def topics() -> tuple[Topic, ...]:
-    return tuple(_topics().values())
+def topics(ros: int | None = None) -> tuple[Topic, ...]:
+    return tuple(_topics(ros or ros_version()).values())
 
 
 def monitored_topics() -> tuple[Topic, ...]:
-    return tuple(t for t in _topics().values() if t.monitor)
+    return tuple(t for t in topics() if t.monitor)
 
 
 def topic_by_name(name: str) -> Topic | None:
-    return next((t for t in _topics().values() if t.name == name), None)
+    return next((t for t in topics() if t.name == name), None)
 
 
 # A global ROS 1 graph name: "/" then tokens of a letter followed by letters, digits and "_".
@@ -202,20 +294,20 @@ def topic_name_problem(name: object) -> str | None:
     return None
 
 
-def service(key: str) -> Service:
-    return _services()[key]
+def service(key: str, ros: int | None = None) -> Service:
+    return _services(ros or ros_version())[key]
 
 
-def services() -> tuple[Service, ...]:
-    return tuple(_services().values())
+def services(ros: int | None = None) -> tuple[Service, ...]:
+    return tuple(_services(ros or ros_version()).values())
 
 
-def action(key: str) -> Action:
-    return _actions()[key]
+def action(key: str, ros: int | None = None) -> Action:
+    return _actions(ros or ros_version())[key]
 
 
-def actions() -> tuple[Action, ...]:
-    return tuple(_actions().values())
+def actions(ros: int | None = None) -> tuple[Action, ...]:
+    return tuple(_actions(ros or ros_version()).values())
 
 
 # --- Robot strings -------------------------------------------------------------------
@@ -375,9 +467,9 @@ _ACTION_TOPIC_TYPES: dict[str, str] = {
 }
 
 
-def action_topic(key: str, suffix: str) -> tuple[str, str]:
+def action_topic(key: str, suffix: str, ros: int | None = None) -> tuple[str, str]:
     """(name, type) of one of an action server's topics: suffix goal|cancel|status|feedback|result."""
-    a = action(key)
+    a = action(key, ros)
     return f"{a.name}/{suffix}", _ACTION_TOPIC_TYPES[suffix].format(type=a.type)
 
 
@@ -420,10 +512,12 @@ _LATCH_SERVICES: dict[str, LatchRule] = {"enable_motors": _never}
 
 
 @cache
-def _latch_rules() -> dict[str, LatchRule]:
-    rules = {topic(key).name: rule for key, rule in _LATCH_TOPICS.items()}
-    rules.update({action_topic(key, "goal")[0]: _never for key in _LATCH_ACTION_GOALS})
-    rules.update({service(key).name: rule for key, rule in _LATCH_SERVICES.items()})
+def _latch_rules(ros: int) -> dict[str, LatchRule]:
+    rules = {topic(key, ros).name: rule for key, rule in _LATCH_TOPICS.items()}
+    # A ROS 1 goal is a publish on <action>/goal; a ROS 2 goal is sent to the action itself.
+    rules.update({(action_topic(key, "goal")[0] if ros == ROS1 else action(key, ros).name): _never
+                  for key in _LATCH_ACTION_GOALS})
+    rules.update({service(key, ros).name: rule for key, rule in _LATCH_SERVICES.items()})
     return rules
 
 
@@ -432,5 +526,5 @@ def passes_latch(name: str, msg: dict[str, Any], *, by_the_stop: bool) -> bool:
     E-STOP is latched? ``by_the_stop``: it is one of the stop's own steps."""
     if name == topic("cmd_vel").name:
         return is_zero_twist(msg)
-    rule = _latch_rules().get(name)
+    rule = _latch_rules(ros_version()).get(name)
     return rule is None or (by_the_stop and rule(msg))
