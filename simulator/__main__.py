@@ -26,6 +26,14 @@ def parse_args() -> argparse.Namespace:
     p.add_argument("--battery-soc", type=float, default=0.85, help="the battery's charge at start, 0-1")
     p.add_argument("--time-scale", type=float, default=1.0,
                    help="the robot's world runs this many times as fast (motion, timers, pauses)")
+    p.add_argument("--ros", type=int, default=1, choices=[1, 2],
+                   help="which robot to be: ROS 1 (rosbridge 0.11, actionlib) or ROS 2 (Jazzy, rosbridge 2.x, Nav2)")
+    p.add_argument("--goals-in-new-thread", action="store_true",
+                   help="ROS 2: as rosbridge's send_action_goals_in_new_thread:=true (a goal no longer holds "
+                        "its client's later frames, so cancel_action_goal works)")
+    p.add_argument("--services-in-new-thread", action="store_true",
+                   help="ROS 2: as rosbridge's call_services_in_new_thread:=true (an unanswered call no longer "
+                        "wedges its client)")
     p.add_argument("--quiet", action="store_true", help="log warnings only")
     return p.parse_args()
 
@@ -39,7 +47,8 @@ def main() -> None:
     robot = SimRobot(
         host=a.host, port=a.port, video_port=a.video_port, map_name=a.map, seed=a.seed, pose_rate_hz=a.pose_rate,
         startup_s=a.startup_s, demo_s=a.demo_s, mic_coding=a.mic_coding, time_scale=a.time_scale,
-        battery_soc=a.battery_soc,
+        battery_soc=a.battery_soc, ros=a.ros, goals_in_new_thread=a.goals_in_new_thread,
+        services_in_new_thread=a.services_in_new_thread,
     )
     asyncio.run(serve(robot))
 

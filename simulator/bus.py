@@ -19,7 +19,6 @@ from typing import Any
 
 from robot import interface as ri
 
-from . import messages
 from .protocol import Broker, ServiceHandler
 
 log = logging.getLogger("simulator")
@@ -99,15 +98,26 @@ class Bus:
     def __init__(self, broker: Broker, clock: Clock) -> None:
         self.broker = broker
         self.clock = clock
+        self.dialect = broker.dialect
         self.rosout_log: collections.deque[dict[str, Any]] = collections.deque(maxlen=200)
         self.tasks: list[asyncio.Task[Any]] = []
         self._warned: dict[str, float] = {}
 
     # --- topics ------------------------------------------------------------------------
 
+    def topic(self, key: str) -> ri.Topic:
+        """The interface topic ``key`` as the simulated robot's ROS names it."""
+        return ri.topic(key, self.dialect.ros)
+
+    def service(self, key: str) -> ri.Service:
+        return ri.service(key, self.dialect.ros)
+
+    def action(self, key: str) -> ri.Action:
+        return ri.action(key, self.dialect.ros)
+
     def publish(self, key: str, msg: dict[str, Any]) -> None:
         """Publish on the interface topic ``key`` (latched if the interface says so)."""
-        t = ri.topic(key)
+        t = self.topic(key)
         self.broker.publish(t.name, msg, latch=t.latched)
 
     def publish_name(self, name: str, msg: dict[str, Any], latch: bool = False) -> None:
@@ -116,39 +126,39 @@ class Bus:
 
     def wants(self, key: str) -> bool:
         """Whether anyone subscribes to ``key``: costly messages are only built for a listener."""
-        return self.broker.wants(ri.topic(key).name)
+        return self.broker.wants(self.topic(key).name)
 
     def announce(self, key: str, msg: dict[str, Any]) -> None:
         """A node publishing on a topic other nodes listen to: subscribers and in-process handlers get it."""
-        name = ri.topic(key).name
+        name = self.topic(key).name
         self.broker.publish(name, msg)
         for handler in self.broker.handlers.get(name, ()):
             handler(msg)
 
     def on(self, key: str, handler: Handler) -> None:
         """Call ``handler(msg)`` for every message a client (or ``announce``) publishes on ``key``."""
-        self.on_name(ri.topic(key).name, handler)
+        self.on_name(self.topic(key).name, handler)
 
     def on_name(self, name: str, handler: Handler) -> None:
         self.broker.handlers[name].append(handler)
 
     def declare(self, name: str, msg_type: str) -> None:
         """Make a topic the interface does not list known to rosapi and to clients."""
-        self.broker.types[name] = msg_type
+        self.broker.types[name] = self.dialect.spell(msg_type)
 
     def latch_lazily(self, key: str, build: Callable[[], dict[str, Any]]) -> None:
         """A latched topic whose (large) message is only built when first needed."""
-        self.broker.lazy_latched[ri.topic(key).name] = build
+        self.broker.lazy_latched[self.topic(key).name] = build
 
     # --- services ------------------------------------------------------------------------
 
     def answer(self, key: str, handler: ServiceHandler) -> None:
         """Answer the interface service ``key``; raise ``protocol.ServiceError`` to fail a call."""
-        s = ri.service(key)
+        s = self.service(key)
         self.answer_name(s.name, s.type, handler)
 
     def answer_name(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
-        self.broker.services[name] = (srv_type, handler)
+        self.broker.services[name] = (self.dialect.spell(srv_type, "srv"), handler)
 
     # --- clock -----------------------------------------------------------------------------
 
@@ -173,8 +183,8 @@ class Bus:
     # --- /rosout ---------------------------------------------------------------------------
 
     def rosout(self, level: int, node: str, text: str) -> None:
-        msg = {"header": messages.header(), "level": level, "name": node, "msg": text, "file": "sim.py",
-               "function": "", "line": 0, "topics": ["/rosout"]}
+        """Log ``text`` from ``node``; ``level`` in ROS 1's scale (1 DEBUG .. 16 FATAL), whichever the ROS."""
+        msg = self.dialect.log(level, node, text)
         self.rosout_log.append(msg)
         log.log(_LOG_LEVELS.get(level, logging.INFO), "%s: %s", node, text)
         self.publish("rosout", msg)

@@ -104,6 +104,22 @@ _DEFS: dict[str, str] = {
     ),
     "rosbridge_msgs/ConnectedClient": "string ip_address; time connection_time",
     "rosbridge_msgs/ConnectedClients": "rosbridge_msgs/ConnectedClient[] clients",
+    # ROS 2 (schemas keyed by the two-part name; ``canonical`` maps pkg/msg/Type to it)
+    "rcl_interfaces/Log": (
+        "time stamp; uint8 level; string name; string msg; string file; string function; uint32 line"
+    ),
+    "nav2_msgs/Particle": "geometry_msgs/Pose pose; float64 weight",
+    "nav2_msgs/ParticleCloud": "std_msgs/Header header; nav2_msgs/Particle[] particles",
+    "nav2_msgs/NavigateToPoseGoal": "geometry_msgs/PoseStamped pose; string behavior_tree",
+    "nav2_msgs/NavigateToPoseResult": "uint16 error_code; string error_msg",
+    "nav2_msgs/NavigateToPoseFeedback": (
+        "geometry_msgs/PoseStamped current_pose; duration navigation_time; duration estimated_time_remaining; "
+        "int16 number_of_recoveries; float32 distance_remaining"
+    ),
+    "unique_identifier_msgs/UUID": "uint8[16] uuid",
+    "action_msgs/GoalInfo": "unique_identifier_msgs/UUID goal_id; time stamp",
+    "action_msgs/GoalStatus": "action_msgs/GoalInfo goal_info; int8 status",
+    "action_msgs/GoalStatusArray": "action_msgs/GoalStatus[] status_list",
     "rosapi/TypeDef": (
         "string type; string[] fieldnames; string[] fieldtypes; int32[] fieldarraylen; string[] examples; "
         "string[] constnames; string[] constvalues"
@@ -125,6 +141,17 @@ for _action in ("move_base_msgs/MoveBase", "cyborg_navigation/Navigation"):
     )
 
 # Services: (request definition, response definition).
+_THREE_PART = re.compile(r"/(?:msg|srv|action)/")
+
+
+def canonical(type_name: str) -> str:
+    """The schema's name of a type in either spelling: ``geometry_msgs/msg/Twist`` is ``geometry_msgs/Twist``."""
+    if type_name.count("/") != 2:
+        return type_name
+    two_part = _THREE_PART.sub("/", type_name, count=1)
+    return "rosapi/" + two_part[len("rosapi_msgs/"):] if two_part.startswith("rosapi_msgs/") else two_part
+
+
 def known_package(msg_type: str) -> bool:
     """Whether the robot has the message package of ``msg_type`` (rosbridge can import its classes)."""
     return any(name.split("/", 1)[0] == msg_type.split("/", 1)[0] for name in _DEFS)
@@ -152,6 +179,10 @@ SERVICE_DEFS: dict[str, tuple[str, str]] = {
     "rosapi/Publishers": ("string topic", "string[] publishers"),
     "rosapi/Subscribers": ("string topic", "string[] subscribers"),
     "rosapi/NodeDetails": ("string node", "string[] subscribing; string[] publishing; string[] services"),
+    "rosapi/GetROSVersion": ("", "uint8 version; string distro"),
+    "action_msgs/CancelGoal": (
+        "action_msgs/GoalInfo goal_info", "int8 return_code; action_msgs/GoalInfo[] goals_canceling",
+    ),
 }
 for _srv, (_req, _resp) in SERVICE_DEFS.items():
     _DEFS[f"{_srv}Request"] = _req
@@ -169,6 +200,9 @@ PRIMITIVES = frozenset(_ZERO) | {"time", "duration"}
 _BYTE_ARRAYS = frozenset({"uint8", "char"})
 
 
+_TIME_KEYS = {"sec": "secs", "nanosec": "nsecs"}
+
+
 class ConversionError(Exception):
     """An incoming message does not fit its type (rosbridge's conversion exceptions)."""
 
@@ -183,13 +217,17 @@ SCHEMAS: dict[str, list[tuple[str, str, int | None]]] = {k: _parse(v) for k, v i
 
 
 def known(msg_type: str) -> bool:
-    return msg_type in SCHEMAS
+    return canonical(msg_type) in SCHEMAS
 
 
 def stamp(t: float | None = None) -> dict[str, int]:
     t = time.time() if t is None else t
     secs = int(t)
     return {"secs": secs, "nsecs": round((t - secs) * 1e9) % 1_000_000_000}
+
+
+def duration(seconds: float) -> dict[str, int]:
+    return stamp(max(0.0, seconds))
 
 
 def header(frame_id: str = "", t: float | None = None, seq: int = 0) -> dict[str, Any]:
@@ -209,7 +247,7 @@ def _default_value(ftype: str, length: int | None) -> Any:
 
 
 def default(msg_type: str) -> dict[str, Any]:
-    return {name: _default_value(ftype, length) for name, ftype, length in SCHEMAS[msg_type]}
+    return {name: _default_value(ftype, length) for name, ftype, length in SCHEMAS[canonical(msg_type)]}
 
 
 def _mismatch(root: str, expected: str, path: list[str], value: Any) -> ConversionError:
@@ -242,6 +280,7 @@ def _primitive(root: str, ftype: str, value: Any, path: list[str]) -> Any:
         raise _mismatch(root, ftype, path, value)
     out = {"secs": 0, "nsecs": 0}
     for key, v in value.items():
+        key = _TIME_KEYS.get(key, key)  # ROS 2's spelling, taken by either server
         if key not in out:
             raise ConversionError(f"Message type {ftype} does not have a field {'.'.join([*path, key])}")
         if type(v) is not int:
@@ -301,6 +340,7 @@ def _message(root: str, msg_type: str, value: dict[str, Any], path: list[str]) -
 
 def normalize(msg_type: str, value: Any) -> dict[str, Any]:
     """Validate ``value`` as a ``msg_type`` message; return it with defaults filled in."""
+    msg_type = canonical(msg_type)
     if msg_type not in SCHEMAS:
         raise ConversionError(f"Unable to load the manifest for message type {msg_type}")
     if type(value) is not dict:
@@ -310,6 +350,7 @@ def normalize(msg_type: str, value: Any) -> dict[str, Any]:
 
 def normalize_request(srv_type: str, args: Any) -> dict[str, Any]:
     """Service args as rosbridge takes them: a dict, or a positional list in field order."""
+    srv_type = canonical(srv_type)
     schema = SCHEMAS[f"{srv_type}Request"]
     if args is None:
         args = {}

@@ -1,9 +1,13 @@
-"""The rosbridge v2 protocol as the ROS 1 rosbridge_server speaks it.
+"""The rosbridge v2 protocol as the ROS 1 rosbridge_server (and, with the ROS 2 dialect, the ROS 2 one) speaks it.
 
 ``Broker`` is the simulator's stand-in for the ROS graph (topics, latched messages,
-services); ``Client`` is one websocket connection and its rosbridge session. Frames
-a client gets wrong are logged (ERROR on /rosout from /rosbridge_websocket) and
-dropped: the ROS 1 server never answers with ``status`` frames.
+services, ROS 2 action servers); ``Client`` is one websocket connection and its rosbridge
+session. Frames a client gets wrong are logged (ERROR on /rosout from /rosbridge_websocket)
+and dropped: neither server answers with ``status`` frames.
+
+The ROS 2 server's launch defaults handle one op of a client at a time: a goal it sent, or a
+call of a service another client serves, holds that client's later frames until it ends
+(``goals_in_new_thread`` / ``services_in_new_thread`` lift that, as the launch arguments do).
 """
 
 from __future__ import annotations
@@ -13,18 +17,17 @@ import collections
 import itertools
 import json
 import logging
-import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from . import messages, rawtypes
+from .dialect import ROS1, Dialect
 
 log = logging.getLogger("simulator.rosbridge")
 
 RECEIVED_KEEP = 10_000
-_TYPE_RE = re.compile(r"^[A-Za-z][\w]*/[A-Za-z][\w]*$")
 
 # level, text -> /rosout from /rosbridge_websocket
 LogFn = Callable[[int, str], None]
@@ -33,6 +36,10 @@ ServiceHandler = Callable[[dict[str, Any]], dict[str, Any]]
 
 class ProtocolError(Exception):
     """A frame rosbridge would refuse; logged and dropped."""
+
+
+class NoAnswer(Exception):
+    """A service handler that never answers (its node died mid-call)."""
 
 
 class ServiceError(Exception):
@@ -100,11 +107,29 @@ class Subscription:
         self.pump = self.queue = self.wake = None
 
 
+class ActionEndpoint:
+    """A ROS 2 action server as rosbridge's action ops reach it (``actions.Ros2Action``)."""
+
+    type: str
+
+    def send_goal(self, client: Client, op_id: Any, args: dict[str, Any]) -> None:
+        raise NotImplementedError
+
+    def cancel_goal(self, client: Client, op_id: Any) -> None:
+        raise NotImplementedError
+
+
 class Broker:
     """Topics, types, latched messages and services: the part of ROS the clients see."""
 
-    def __init__(self, log_fn: LogFn) -> None:
+    def __init__(self, log_fn: LogFn, dialect: Dialect = ROS1, goals_in_new_thread: bool = False,
+                 services_in_new_thread: bool = False) -> None:
         self.log = log_fn
+        self.dialect = dialect
+        self.encode = dialect.encode
+        self.goals_in_new_thread = goals_in_new_thread
+        self.services_in_new_thread = services_in_new_thread
+        self.actions: dict[str, ActionEndpoint] = {}
         self.types: dict[str, str] = {}
         self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
         self.latched: dict[str, str] = {}
@@ -130,7 +155,7 @@ class Broker:
         subs = self.subs.get(topic)
         if not subs and not latch:
             return
-        frame = messages.encode({"op": "publish", "topic": topic, "msg": msg})
+        frame = self.encode({"op": "publish", "topic": topic, "msg": msg})
         if latch:
             self.latched[topic] = frame
         raw: bytes | None = None
@@ -144,7 +169,7 @@ class Broker:
     def latched_frame(self, topic: str) -> str | None:
         if topic not in self.latched and topic in self.lazy_latched:
             msg = self.lazy_latched.pop(topic)()
-            self.latched[topic] = messages.encode({"op": "publish", "topic": topic, "msg": msg})
+            self.latched[topic] = self.encode({"op": "publish", "topic": topic, "msg": msg})
         return self.latched.get(topic)
 
     # --- introspection ---------------------------------------------------------------
@@ -203,6 +228,7 @@ class Client:
         "advertise", "unadvertise", "publish", "subscribe", "unsubscribe", "call_service",
         "advertise_service", "unadvertise_service", "service_response", "fragment",
     )
+    ACTION_OPS = ("send_action_goal", "cancel_action_goal")
 
     def __init__(self, broker: Broker, send: Callable[[str | bytes], Any], address: str = "") -> None:
         self.broker = broker
@@ -213,6 +239,9 @@ class Client:
         self.outbox: asyncio.Queue[str | bytes] = asyncio.Queue()
         self.closed = False
         self.fragments: dict[Any, dict[int, str]] = {}
+        self.ops = self.OPS + (self.ACTION_OPS if broker.dialect.ros2 else ())
+        self.busy: set[Any] = set()  # what holds this client's frames (ROS 2 server, one op at a time)
+        self.held: collections.deque[str | bytes] = collections.deque()
 
     # --- output ----------------------------------------------------------------------
 
@@ -229,7 +258,16 @@ class Client:
             await self._send(await self.outbox.get())
 
     def reply(self, frame: dict[str, Any]) -> None:
-        self.send(messages.encode(frame))
+        self.send(self.broker.encode(frame))
+
+    def hold(self, what: Any) -> None:
+        """Handle no more of this client's frames until ``release(what)``."""
+        self.busy.add(what)
+
+    def release(self, what: Any) -> None:
+        self.busy.discard(what)
+        while self.held and not self.busy:
+            self.handle(self.held.popleft())
 
     def respond(self, mid: Any, service: str, values: Any, ok: bool) -> None:
         """A ``service_response`` frame, with the caller's id if it gave one."""
@@ -243,6 +281,9 @@ class Client:
         self.broker.log(level, f"{prefix} {text}")
 
     def handle(self, raw: str | bytes) -> None:
+        if self.busy:
+            self.held.append(raw)
+            return
         try:
             frame = json.loads(raw)
         except ValueError:
@@ -251,12 +292,12 @@ class Client:
         if not isinstance(frame, dict) or "op" not in frame:
             self.log(
                 8, "Received a message without an op.  All messages require 'op' field with value one of: "
-                f"{list(self.OPS)}.  Original message was: {str(raw)[:200]}",
+                f"{list(self.ops)}.  Original message was: {str(raw)[:200]}",
             )
             return
         op, mid = frame["op"], frame.get("id")
-        if op not in self.OPS:
-            self.log(8, f"Unknown operation: {op}.  Allowed operations: {list(self.OPS)}", mid)
+        if op not in self.ops:
+            self.log(8, f"Unknown operation: {op}.  Allowed operations: {list(self.ops)}", mid)
             return
         try:
             getattr(self, f"op_{op}")(frame, mid)
@@ -268,20 +309,21 @@ class Client:
 
     def _topic_type(self, topic: str, claimed: str | None) -> str:
         known = self.broker.types.get(topic)
-        if claimed is not None and known is not None and claimed != known:
+        dialect = self.broker.dialect
+        if claimed is not None and known is not None and messages.canonical(claimed) != messages.canonical(known):
             raise ProtocolError(
                 f"Tried to register topic {topic} with type {claimed} but it is already established "
                 f"with type {known}"
             )
-        if claimed is not None and not _TYPE_RE.match(claimed):
+        if claimed is not None and not dialect.valid_type(claimed):
             raise ProtocolError(f"Unable to import msg class {claimed}: invalid message type")
         if claimed is not None and known is None and not messages.known_package(claimed):
-            package, name = claimed.split("/", 1)
+            package, name = claimed.split("/")[0], claimed.split("/")[-1]
             raise ProtocolError(f"Unable to import msg class {name} from package {package}. "
                                 f"Caused by: No module named {package}.msg")
         if known is None and claimed is None:
             raise ProtocolError(f"Cannot infer topic type for topic {topic} as it is not yet advertised")
-        return known or claimed  # type: ignore[return-value]
+        return known or dialect.spell(claimed)  # type: ignore[arg-type]
 
     def op_advertise(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str), (True, "type", str), (False, "latch", bool),
@@ -346,6 +388,8 @@ class Client:
         if owner is not None:
             call_id = next(self.broker.call_ids)
             self.broker.pending_calls[call_id] = (self, mid, name)
+            if self.broker.dialect.ros2 and not self.broker.services_in_new_thread:
+                self.hold(call_id)  # a service that never answers wedges this client
             owner.reply({"op": "call_service", "id": call_id, "service": name, "args": args})
             return
         entry = self.broker.services.get(name)
@@ -356,6 +400,10 @@ class Client:
             request = messages.normalize_request(srv_type, args)
             values: Any = handler(request)
             ok = True
+        except NoAnswer:
+            if self.broker.dialect.ros2 and not self.broker.services_in_new_thread:
+                self.hold(("no answer", mid))  # wedged for good
+            return
         except (ServiceError, messages.ConversionError) as exc:
             self.log(8, f"call_service {type(exc).__name__}: {exc}", mid)
             values, ok = str(exc), False
@@ -377,6 +425,7 @@ class Client:
             return
         caller, caller_id, name = pending
         caller.respond(caller_id, name, frame.get("values", {}), frame["result"])
+        caller.release(mid)
 
     def op_fragment(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "id", str), (True, "data", str), (True, "num", int), (True, "total", int)])
@@ -385,3 +434,23 @@ class Client:
         if len(parts) == frame["total"]:
             del self.fragments[mid]
             self.handle("".join(parts[i] for i in sorted(parts)))
+
+    def op_send_action_goal(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "action", str), (True, "action_type", str), (False, "args", dict),
+                       (False, "feedback", bool)])
+        endpoint = self.broker.actions.get(frame["action"])
+        if endpoint is None or messages.canonical(frame["action_type"]) != messages.canonical(endpoint.type):
+            raise ProtocolError(f"Action {frame['action']} of type {frame['action_type']} is not available")
+        if not self.broker.goals_in_new_thread:
+            self.hold(("goal", mid))  # released by the goal's action_result
+        try:
+            endpoint.send_goal(self, mid, frame.get("args", {}))
+        except Exception:
+            self.release(("goal", mid))
+            raise
+
+    def op_cancel_action_goal(self, frame: dict[str, Any], mid: Any) -> None:
+        _check(frame, [(True, "action", str)])
+        endpoint = self.broker.actions.get(frame["action"])
+        if endpoint is not None:
+            endpoint.cancel_goal(self, mid)

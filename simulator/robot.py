@@ -22,6 +22,7 @@ from robot import interface as ri
 from . import messages
 from .bus import Bus, Clock, SimNode
 from .camera import VideoServer
+from .dialect import DIALECTS
 from .nodes.audiovisual import AudioVisualNode, Microphone, Speaker
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
@@ -65,7 +66,12 @@ class SimRobot:
         mic_tone_hz: float = 440.0,
         mic_coding: str = "wave",
         time_scale: float = 1.0,
+        ros: int = ri.ROS1,
+        goals_in_new_thread: bool = False,
+        services_in_new_thread: bool = False,
     ) -> None:
+        """``ros``: which rosbridge to be (1, or 2 for ROS 2 Jazzy with Nav2); the two ``*_in_new_thread``
+        flags are the ROS 2 rosbridge's launch arguments of those names (off by default, as there)."""
         self.host = host
         self.port = port
         self.video_port = video_port
@@ -75,9 +81,11 @@ class SimRobot:
         x, y, yaw = self.world.start
         self.base = Base(self.world, x, y, yaw)  # the servers see base, world and broker
         self.clock = Clock(time_scale)
-        self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text))
+        self.ros = ros
+        self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text),
+                             DIALECTS[ros], goals_in_new_thread, services_in_new_thread)
         self.bus = Bus(self.broker, self.clock)
-        for t in ri.topics():
+        for t in ri.topics(ros):
             self.bus.declare(t.name, t.type)
 
         self.nodes: list[SimNode] = []
@@ -85,7 +93,7 @@ class SimRobot:
         # Added in tick order: physics, then navigation, emotions, state timers.
         self.base_node = self.add(BaseNode(self.base, self.world, self.rng, pose_rate_hz, battery_soc,
                                            battery_drain_per_s, battery_charge_per_s))
-        self.nav_node = self.add(NavigationNode(self.base, self.world, self.rng, nav_speed))
+        self.nav_node = self.add(NavigationNode(self.base, self.world, self.rng, nav_speed, ros))
         self.add(LocalisationNode(self.base, self.rng))
         self.add(LaserNode(self.base, self.world))
         self.add(CostmapNode(self.base, self.world, lambda: self.nav_node.navigator.active))
@@ -118,7 +126,7 @@ class SimRobot:
         for node in self.nodes:
             node.start(self.bus)
         # Encode the latched map now: a 4000 x 4000 map takes seconds, better before than mid-session.
-        self.broker.latched_frame(ri.topic("map").name)
+        self.broker.latched_frame(self.bus.topic("map").name)
         await self.server.start(self.host, self.port)
         self.port = self.server.port
         await self.video.start(self.host, self.video_port)

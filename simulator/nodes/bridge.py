@@ -19,7 +19,7 @@ from robot import interface as ri
 
 from .. import messages, rawtypes
 from ..bus import Bus, SimNode
-from ..protocol import ServiceError
+from ..protocol import NoAnswer, ServiceError
 
 BRIDGE = "/rosbridge_websocket"
 
@@ -70,8 +70,21 @@ class BridgeNode(SimNode):
         bus.answer("rosapi_publishers", lambda r: {"publishers": self.publishers(r["topic"])})
         bus.answer("rosapi_subscribers", lambda r: {"subscribers": self.subscribers(r["topic"])})
         bus.answer("rosapi_node_details", lambda r: self.node_details(r["node"]))
+        if bus.dialect.ros2:
+            bus.answer_name("/rosapi/get_ros_version", "rosapi/GetROSVersion",
+                            lambda r: {"version": 2, "distro": "jazzy"})
+            # rosbridge 2.1.0's rosapi dies on these (upstream bugs): its services vanish, the call is never answered
+            for name in ("/rosapi/get_param_names", "/rosapi/message_details"):
+                broker.services[name] = (broker.services[name][0], self._crash_rosapi)
         bus.every(8.0, lambda: bus.rosout(2, *self.rng.choice(CHATTER)))
         self.publish_client_count()
+
+    def _crash_rosapi(self, request: dict[str, Any]) -> dict[str, Any]:
+        services = self.bus.broker.services
+        for name in [n for n in services if n.startswith("/rosapi/")]:
+            del services[name]
+        self.bus.rosout(16, "/rosapi", "rosapi_node crashed")
+        raise NoAnswer
 
     def publish_client_count(self) -> None:
         clients = self.bus.broker.clients
@@ -99,13 +112,13 @@ class BridgeNode(SimNode):
         broker = self.bus.broker
         if topic not in broker.types:
             return []
-        if topic == ri.topic("rosout").name:
+        if topic == self.bus.topic("rosout").name:
             return sorted(set(self._graph_nodes()))
-        if topic in (ri.topic("client_count").name, "/connected_clients"):
+        if topic in (self.bus.topic("client_count").name, "/connected_clients"):
             return [BRIDGE]
         found: set[str] = set()
         for node in self.nodes():
-            if any(ri.topic(key).name == topic for key in node.publishes):
+            if any(self.bus.topic(key).name == topic for key in node.publishes):
                 found.add(self._owner(topic) or (node.names[0] if node.names else ""))
         if broker.publishers.get(topic):
             found.add(BRIDGE)

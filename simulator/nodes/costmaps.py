@@ -153,7 +153,7 @@ class CostmapNode(SimNode):
         bus.every(0.2, self._pub_local_plan)
 
     def _pub_global(self) -> None:
-        name = ri.topic("global_costmap").name
+        name = self.bus.topic("global_costmap").name
         if self.bus.wants("global_costmap") and self._global is None:
             self._global = global_costmap(self.world)  # built for its first listener, then kept
             self.bus.publish_name(name, grid_message(self._global, ri.MAP_FRAME), latch=True)

@@ -77,4 +77,4 @@ class LocalisationNode(SimNode):
     def _publish(self) -> None:
         b = self.body
         poses = [pose(x, y, yaw) for x, y, yaw in self.cloud.poses(b.x, b.y, b.yaw)]
-        self.bus.publish("particlecloud", {"header": messages.header(ri.MAP_FRAME), "poses": poses})
+        self.bus.publish("particlecloud", self.bus.dialect.particles(messages.header(ri.MAP_FRAME), poses))

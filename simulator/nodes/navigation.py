@@ -5,6 +5,7 @@ move_base's local planner is simplified: it follows an A* path with a pure-pursu
 
 from __future__ import annotations
 
+import itertools
 import math
 import random
 import time
@@ -15,7 +16,7 @@ from typing import Any
 from robot import interface as ri
 
 from .. import messages, world
-from ..actions import ABORTED, ACTIVE, PREEMPTED, SUCCEEDED, ActionServer, Goal
+from ..actions import ABORTED, ACTIVE, PREEMPTED, SUCCEEDED, ActionServer, Goal, Ros2Action
 from ..bus import Bus, SimNode
 from ..world import Base, wrap
 from .shapes import body_pose, grid, pose
@@ -93,7 +94,8 @@ class NavigationNode(SimNode):
     names = ("/amcl", "/map_server", "/move_base", "/cyborg_navigation")
     publishes = ("map", "amcl_pose", "plan", "current_location")
 
-    def __init__(self, body: world.Base, world_map: world.WorldMap, rng: random.Random, nav_speed: float) -> None:
+    def __init__(self, body: world.Base, world_map: world.WorldMap, rng: random.Random, nav_speed: float,
+                 ros: int = ri.ROS1) -> None:
         self.body = body
         self.world = world_map
         self.rng = rng
@@ -101,17 +103,26 @@ class NavigationNode(SimNode):
         self.navigator = Navigator(body, max_v=nav_speed)
         self.current_location = ""
         self._map_load_time = messages.stamp()
-        mb, nav = ri.action("move_base"), ri.action("navigation")
+        mb, nav = ri.action("move_base", ros), ri.action("navigation", ros)
 
-        def publish(name: str, msg: dict[str, Any]) -> None:
-            self.bus.publish_name(name, msg)
+        def publish(name: str, msg: dict[str, Any], latch: bool = False) -> None:
+            self.bus.publish_name(name, msg, latch)
 
         self.move_base = ActionServer(mb.name, mb.type, publish, self._move_base_goal, self._move_base_cancel)
         self.navigation = ActionServer(nav.name, nav.type, publish, self._navigation_goal, self._navigation_cancel)
+        # ROS 2: Nav2's NavigateToPose (goal {pose, behavior_tree}) and the navigation orders, as action ops
+        self.ros2_actions = [] if ros == ri.ROS1 else [
+            Ros2Action(self.move_base, mb.type, publish, lambda g: {"target_pose": g["pose"]}, self._nav2_feedback),
+            Ros2Action(self.navigation, nav.type, publish),
+        ]
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        for server in (self.move_base, self.navigation):
+        for action in self.ros2_actions:
+            bus.broker.actions[action.server.name] = action
+            bus.declare(action.server.status_topic, ri.ACTION_STATUS_TYPE)
+            bus.answer_name(action.cancel_service, ri.ACTION_CANCEL_TYPE, action.cancel_service_call)
+        for server in () if self.ros2_actions else (self.move_base, self.navigation):
             for name, msg_type in server.topics.items():
                 bus.declare(name, msg_type)
             bus.on_name(f"{server.name}/goal", server.receive_goal)
@@ -168,6 +179,7 @@ class NavigationNode(SimNode):
                                      "goal": {"target_pose": m}})
 
     def _move_base_goal(self, goal: Goal) -> None:
+        goal.data["t0"] = self.bus.clock.now()
         target = goal.goal["target_pose"]["pose"]
         x, y = target["position"]["x"], target["position"]["y"]
         yaw = world.quaternion_to_yaw(target["orientation"])
@@ -254,7 +266,7 @@ class NavigationNode(SimNode):
 
     def _pub_action_status(self) -> None:
         for server in (self.move_base, self.navigation):
-            if self.bus.broker.wants(f"{server.name}/status"):
+            if self.bus.broker.wants(server.status_topic):
                 server.publish_status()
             else:
                 server.status_message()  # still expire old goals
@@ -284,6 +296,15 @@ class NavigationNode(SimNode):
             if here:
                 self.bus.rosout(2, NAV_NODE, f"Arrived at {here}")
         self.bus.publish("current_location", {"data": here})
+
+    def _nav2_feedback(self, goal: Goal, feedback: dict[str, Any]) -> dict[str, Any]:
+        nav = self.navigator
+        points = [(self.body.x, self.body.y), *nav.path[nav.idx:]] if nav.active else []
+        left = sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(points))
+        return {"current_pose": feedback["base_position"],
+                "navigation_time": messages.duration(self.bus.clock.now() - goal.data.get("t0", self.bus.clock.now())),
+                "estimated_time_remaining": messages.duration(left / max(self.navigator.max_v, 1e-3)),
+                "number_of_recoveries": 0, "distance_remaining": left}
 
     def _map_message(self) -> dict[str, Any]:
         w = self.world
