@@ -99,7 +99,7 @@ def health_report() -> dict[str, Any]:
     status = link_status() if "redis" not in down else {"connected": False, "url": settings.ROSBRIDGE_URL}
     report.update(connected=bool(status["connected"]), link_running=bool(status.get("link_running", False)),
                   command_path=bool(status.get("command_path", False)), robot_url=status.get("url") or "",
-                  video_url=settings.VIDEO_URL,
+                  video_url=settings.VIDEO_URL, ros=status.get("ros"),
                   failing_tasks=[*status.get("failing_tasks", []), *failing()], link_holder=status.get("holder"),
                   failed_subscriptions=status.get("failed_subscriptions") or {},
                   uplink=status.get("uplink"), reached=describe_uplink(status.get("uplink")),

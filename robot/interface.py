@@ -259,6 +259,7 @@ def reload() -> None:
     """Forget cached names (tests that override the settings call this)."""
     for f in (_topics, _services, _actions, _latch_rules):
         f.cache_clear()
+    use_ros(None)
 
 
 def topic(key: str, ros: int | None = None) -> Topic:

@@ -54,6 +54,8 @@ class LinkCore:
         self.failed_subscriptions: dict[str, str] = {}
         self.listeners: list[Listener] = []
         self.connected = False
+        # Which ROS the robot runs: forced by ROBOT_ROS, else found out on each connect (robot.link.dialect).
+        self.ros_version = ri.ros_version()
         self.since = time.time()
         self.attempts = 0
         self.ros: roslibpy.Ros | None = None

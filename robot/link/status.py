@@ -88,7 +88,7 @@ class Upkeep(LinkCore):
             "holder": self.lease.holder if self.lease is not None else None,
             "failed_subscriptions": dict(self.failed_subscriptions),
             "connecting_until": self.connecting_until,
-            "responding": self.responding, "heard_at": self.heard_at,
+            "responding": self.responding, "heard_at": self.heard_at, "ros": self.ros_version,
         }
 
     async def set_command_path(self, ok: bool) -> None:

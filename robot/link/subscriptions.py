@@ -13,6 +13,8 @@ from typing import Any
 import roslibpy
 
 from robot import interface as ri
+from robot.link.dialect import ROS_VERSION_SERVICE, to_model, version_from_answer
+from robot.link.rosclient import call_service
 from robot.link.status import ROSBRIDGE_NODE, Upkeep
 from robot.live.announce import aannounce
 from robot.live.groups import TopicUpdate
@@ -47,6 +49,33 @@ def array_topics() -> frozenset[str]:
 
 
 class Subscriptions(Upkeep):
+    def _on_ready(self, at: float) -> None:
+        super()._on_ready(at)
+        if not self._stopped and ri.configured_ros() is None:
+            self._spawn(self._find_ros())
+
+    async def _find_ros(self) -> None:
+        """Ask the robot which ROS it runs; on a change, use that ROS's names and subscribe by them."""
+        if self.ros is None:
+            return
+        reply = await call_service(self.ros, *ROS_VERSION_SERVICE, {}, self.service_timeout_s)
+        version = version_from_answer(reply["ok"], reply.get("values") if reply["ok"] else reply.get("error"))
+        if version is None:
+            log.warning("could not find out which ROS the robot runs (%s); using ROS %d",
+                        reply.get("error"), self.ros_version)
+            return
+        ri.use_ros(version)
+        if version == self.ros_version:
+            return
+        log.info("the robot runs ROS %d: using its names", version)
+        old, self.ros_version = self.topics, version
+        self.topics = list(ri.monitored_topics())
+        for t in old:
+            self.unsubscribe(t.name, holder=REGISTRY_HOLDER)
+        for t in self.topics:
+            self.subscribe(t.name, t.type, holder=REGISTRY_HOLDER)
+        await self.publish_status()
+
     def _received(self, name: str, msg_type: str, msg: dict[str, Any]) -> None:
         """A topic message, on the reactor thread: handled at once when that is the loop's own
         thread (Daphne), not a self-pipe wake-up and a loop turn later."""
@@ -102,6 +131,7 @@ class Subscriptions(Upkeep):
         if self._stopped:
             return
         self.heard_at = t
+        msg = to_model(self.ros_version, msg_type, msg)
         if name == ri.topic("rosout").name and msg.get("name") == ROSBRIDGE_NODE:
             self._note_refusal(str(msg.get("msg", "")))
         for listener in self.listeners:

@@ -76,6 +76,7 @@ class LinkStatus(TypedDict):
     connecting_until: float  # epoch seconds: a link just started, not yet connected, is connecting until then
     responding: bool  # the robot said something (a message, a rosapi answer) within ROBOT_HANG_S
     heard_at: float  # epoch seconds when it last did
+    ros: int  # the ROS the robot runs (1 or 2), as the link found out or ROBOT_ROS forces
 
 
 class LinkRequest(TypedDict, total=False):

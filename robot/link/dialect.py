@@ -1,0 +1,88 @@
+"""Which ROS the robot runs, and what a ROS 2 robot says turned into the one model the product uses.
+
+The product's model is the ROS 1 robot's (ROBOT_INTERFACE.md): stamps ``{secs, nsecs}``, /rosout
+levels 1-16 with a header and a ``/``-named node, a PoseArray of particles, actionlib goal status
+(``status_list[{goal_id{id, stamp}, status}]``, 3 SUCCEEDED, 4 ABORTED ...). A ROS 2 robot's
+messages are translated here, where they come in, so nothing above the link knows which ROS.
+"""
+
+from __future__ import annotations
+
+import base64
+from collections.abc import Callable
+from typing import Any
+
+from robot import interface as ri
+
+# /rosapi/get_ros_version: only ROS 2's rosapi serves it.
+ROS_VERSION_SERVICE = ("/rosapi/get_ros_version", "rosapi_msgs/srv/GetROSVersion")
+MISSING_SERVICE = "does not exist"
+
+# action_msgs/GoalStatus -> actionlib's: 1 ACCEPTED -> PENDING, 2 EXECUTING -> ACTIVE, 3 CANCELING ->
+# PREEMPTING, 4 SUCCEEDED -> SUCCEEDED (3), 5 CANCELED -> PREEMPTED (2), 6 ABORTED -> ABORTED (4).
+GOAL_STATUS_FROM_ROS2 = {0: 0, 1: 0, 2: 1, 3: 6, 4: 3, 5: 2, 6: 4}
+# rcl_interfaces/Log levels 10..50 -> rosgraph_msgs/Log's 1..16
+LOG_LEVEL_FROM_ROS2 = {10: 1, 20: 2, 30: 4, 40: 8, 50: 16}
+
+
+def version_from_answer(ok: bool, values: Any) -> int | None:
+    """The robot's ROS from /rosapi/get_ros_version's answer; None if the answer says nothing
+    (rosapi away, the call timed out)."""
+    if ok and isinstance(values, dict) and values.get("version") in ri.ROS_VERSIONS:
+        return int(values["version"])
+    if not ok and MISSING_SERVICE in str(values):
+        return ri.ROS1
+    return None
+
+
+def goal_id_from_uuid(uuid: Any) -> str:
+    """A ROS 2 goal's UUID (base64 or 16 ints, as rosbridge may send it) as the text id the model keeps."""
+    raw = bytes(uuid) if isinstance(uuid, list) else base64.b64decode(str(uuid) or "")
+    return raw.hex()
+
+
+def _stamps(value: Any) -> Any:
+    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is (large lists of numbers are not walked)."""
+    if isinstance(value, dict):
+        if "nanosec" in value and "sec" in value and len(value) == 2:
+            return {"secs": value["sec"], "nsecs": value["nanosec"]}
+        return {k: _stamps(v) for k, v in value.items()}
+    if isinstance(value, list) and value and isinstance(value[0], dict | list):
+        return [_stamps(v) for v in value]
+    return value
+
+
+def _log(msg: dict[str, Any]) -> dict[str, Any]:
+    name = str(msg.get("name", ""))
+    return {"header": {"seq": 0, "stamp": msg.get("stamp", {"secs": 0, "nsecs": 0}), "frame_id": ""},
+            "level": LOG_LEVEL_FROM_ROS2.get(int(msg.get("level", 20)), 2),
+            "name": name if name.startswith("/") else f"/{name}", "msg": msg.get("msg", ""),
+            "file": msg.get("file", ""), "function": msg.get("function", ""), "line": msg.get("line", 0),
+            "topics": []}
+
+
+def _particles(msg: dict[str, Any]) -> dict[str, Any]:
+    return {"header": msg.get("header", {}), "poses": [p.get("pose", {}) for p in msg.get("particles", [])]}
+
+
+def _goal_status(msg: dict[str, Any]) -> dict[str, Any]:
+    return {"header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}, "status_list": [
+        {"goal_id": {"id": goal_id_from_uuid(s["goal_info"]["goal_id"]["uuid"]), "stamp": s["goal_info"]["stamp"]},
+         "status": GOAL_STATUS_FROM_ROS2.get(int(s["status"]), 9), "text": ""}
+        for s in msg.get("status_list", [])]}
+
+
+_BY_TYPE: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
+    "rcl_interfaces/Log": _log,
+    "nav2_msgs/ParticleCloud": _particles,
+    "action_msgs/GoalStatusArray": _goal_status,
+}
+
+
+def to_model(ros: int, msg_type: str, msg: dict[str, Any]) -> dict[str, Any]:
+    """A message as the product's model has it (the same message on a ROS 1 robot)."""
+    if ros == ri.ROS1:
+        return msg
+    msg = _stamps(msg)
+    convert = _BY_TYPE.get(ri.ros1_spelling(msg_type))
+    return convert(msg) if convert is not None else msg
