@@ -469,8 +469,11 @@ _ACTION_TOPIC_TYPES: dict[str, str] = {
 
 
 def action_topic(key: str, suffix: str, ros: int | None = None) -> tuple[str, str]:
-    """(name, type) of one of an action server's topics: suffix goal|cancel|status|feedback|result."""
+    """(name, type) of one of an action server's topics: suffix goal|cancel|status|feedback|result.
+    On ROS 2 the status is the action's hidden status topic; goal and cancel are the link's to route."""
     a = action(key, ros)
+    if suffix == "status" and (ros or ros_version()) == ROS2:
+        return a.name + ACTION_STATUS_SUFFIX, ACTION_STATUS_TYPE
     return f"{a.name}/{suffix}", _ACTION_TOPIC_TYPES[suffix].format(type=a.type)
 
 
@@ -515,9 +518,8 @@ _LATCH_SERVICES: dict[str, LatchRule] = {"enable_motors": _never}
 @cache
 def _latch_rules(ros: int) -> dict[str, LatchRule]:
     rules = {topic(key, ros).name: rule for key, rule in _LATCH_TOPICS.items()}
-    # A ROS 1 goal is a publish on <action>/goal; a ROS 2 goal is sent to the action itself.
-    rules.update({(action_topic(key, "goal")[0] if ros == ROS1 else action(key, ros).name): _never
-                  for key in _LATCH_ACTION_GOALS})
+    # A goal is a publish on <action>/goal (the link sends it as a ROS 2 action goal on ROS 2).
+    rules.update({action_topic(key, "goal", ros)[0]: _never for key in _LATCH_ACTION_GOALS})
     rules.update({service(key, ros).name: rule for key, rule in _LATCH_SERVICES.items()})
     return rules
 

@@ -101,6 +101,7 @@ class RobotLink(Serving):
             self._tasks.append(self._coalescer.close())
         await asyncio.gather(cancel_and_wait(self._tasks, 2), self._inflight.close(2))
         self._tasks.clear()
+        self.nav2.close()
         if self.guard is not None:
             self.guard.stop()  # zero before the connection goes, if the robot may be moving
         if self.ros is not None:

@@ -12,6 +12,7 @@ import roslibpy
 
 from robot import interface as ri
 from robot.link.guard import CmdVelGuard
+from robot.link.nav2 import Ros2Goals
 from robot.link.rosclient import Publishers
 from robot.live.fanout import Coalescer
 from robot.live.state import StateStore
@@ -56,6 +57,7 @@ class LinkCore:
         self.connected = False
         # Which ROS the robot runs: forced by ROBOT_ROS, else found out on each connect (robot.link.dialect).
         self.ros_version = ri.ros_version()
+        self.nav2 = Ros2Goals(url, lambda: self.ros, service_timeout_s)
         self.since = time.time()
         self.attempts = 0
         self.ros: roslibpy.Ros | None = None

@@ -108,6 +108,8 @@ class Serving(Subscriptions):
             refused = self._held_back(request, request["topic"], request["msg"])
             if refused:
                 return refused
+            if self.ros_version == ri.ROS2 and (routed := await self.nav2.publish(request["topic"], request["msg"])):
+                return routed
             assert self.ros is not None
             self._publishers.publish(self.ros, request["topic"], request["msg_type"], request["msg"])
             return {"ok": True}

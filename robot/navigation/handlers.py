@@ -72,11 +72,10 @@ async def _render_and_publish(msg: dict[str, Any], t: float, seq: int) -> None:
 
 async def track_goal_statuses(link: RobotLink) -> None:
     """Keep the statuses the robot reports for goals, past actionlib's few-second window."""
-    names = {}
+    names = {ri.action_topic(key, "status", ros)[0]: key for key in ("move_base", "navigation")
+             for ros in ri.ROS_VERSIONS}  # the link may find out the robot's ROS later
     for key in ("move_base", "navigation"):
-        name, msg_type = ri.action_topic(key, "status")
-        names[name] = key
-        link.subscribe(name, msg_type)
+        link.subscribe(*ri.action_topic(key, "status"))
     pending: list[dict[str, Any]] = []
     wake = asyncio.Event()
 

@@ -19,12 +19,17 @@ def _private_var_dir(settings, tmp_path):
 
 
 @pytest.fixture
-def sim():
-    """The simulator with its world at 4 times the pace: goals are reached in a quarter of the time."""
+def sim(request):
+    """The simulator with its world at 4 times the pace: goals are reached in a quarter of the time.
+    Parametrize it (indirect) with 2 for a ROS 2 robot."""
     from simulator.harness import SimThread
 
-    with SimThread(port=0, video_port=0, startup_s=0.5, time_scale=4.0) as running:
+    ros = getattr(request, "param", 1)
+    with SimThread(port=0, video_port=0, startup_s=0.5, time_scale=4.0, ros=ros) as running:
         yield running
+
+
+EITHER_ROS = pytest.mark.parametrize("sim", [1, 2], indirect=True, ids=["ros1", "ros2"])
 
 
 @pytest.fixture
@@ -35,6 +40,7 @@ def nav_link(sim, settings):
     runner.start()
     tracker = asyncio.run_coroutine_threadsafe(track_goal_statuses(runner.link), runner.loop)
     try:
+        wait_until(lambda: runner.link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
         wait_until(lambda: stored(MAP_META_KEY), timeout=10, what="the map to be rendered")
         yield runner.link
     finally:
@@ -57,4 +63,4 @@ def wait_goal_state(client, *states: str, timeout: float = 20.0) -> str:
                       what=f"goal status in {states}")
 
 
-__all__ = ["GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "goal_state", "stored", "wait_goal_state"]
+__all__ = ["EITHER_ROS", "GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "goal_state", "stored", "wait_goal_state"]

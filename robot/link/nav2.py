@@ -1,0 +1,122 @@
+"""ROS 2 actions (Nav2's NavigateToPose, the navigation orders) behind the model's actionlib goals.
+
+Above the link a goal is a publish on ``<action>/goal`` and a cancel one on ``<action>/cancel``
+(the ROS 1 robot's actionlib). On a ROS 2 robot the link turns them into what its rosbridge takes:
+the goal as ``send_action_goal`` on a connection of its own (rosbridge 2.x by default handles a
+client's next frame only after its goal ends: on the link's socket a goal would hold back every
+publish, the E-STOP's zero included), and every cancel as a call of the hidden
+``<action>/_action/cancel_goal`` service (a ``cancel_action_goal`` on the goal's socket would wait
+for the goal to end). Goal status comes from ``<action>/_action/status``; the UUID rosbridge gave
+our goal is learnt there (the first new goal after ours was sent) and shown under our id.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import time
+from collections.abc import Callable
+from typing import Any
+
+import roslibpy
+
+from robot import interface as ri
+from robot.link.dialect import goal_id_from_uuid
+from robot.link.rosclient import LinkRos, call_service, close_quietly
+from robot.live.groups import LinkReply
+
+log = logging.getLogger(__name__)
+
+ZERO_UUID = [0] * 16
+NAV2_TYPE = "nav2_msgs/action/NavigateToPose"
+
+
+def action_of(topic: str) -> tuple[ri.Action, str] | None:
+    """(the action, ``goal`` or ``cancel``) when ``topic`` is one of an action's inputs."""
+    for action in ri.actions():
+        for suffix in ("goal", "cancel"):
+            if topic == f"{action.name}/{suffix}":
+                return action, suffix
+    return None
+
+
+def goal_args(action: ri.Action, goal: dict[str, Any]) -> dict[str, Any]:
+    """The actionlib goal's content as the ROS 2 action's goal."""
+    if action.type == NAV2_TYPE:
+        return {"pose": goal["target_pose"], "behavior_tree": ""}
+    return goal
+
+
+def cancel_request(uuid: list[int] | None, before: float | None = None) -> dict[str, Any]:
+    """action_msgs/CancelGoal: a zero UUID and stamp cancel every goal; a zero UUID and a stamp, those
+    accepted up to it; a UUID, that goal."""
+    sec = int(before or 0)
+    return {"goal_info": {"goal_id": {"uuid": uuid or ZERO_UUID},
+                          "stamp": {"sec": sec, "nanosec": int(((before or 0) - sec) * 1e9)}}}
+
+
+class Ros2Goals:
+    """The link's ROS 2 goals: ``url`` is the robot's rosbridge, ``ros`` the link's own connection."""
+
+    def __init__(self, url: str, ros: Callable[[], roslibpy.Ros | None], timeout_s: float) -> None:
+        self.url = url
+        self.ros = ros
+        self.timeout_s = timeout_s
+        self.uuids: dict[str, str] = {}  # rosbridge's UUID (hex) -> our goal id
+        self._unmatched: collections.deque[tuple[float, str]] = collections.deque()  # (sent at, our id)
+        self._connections: dict[str, roslibpy.Ros] = {}
+
+    async def publish(self, topic: str, msg: dict[str, Any]) -> LinkReply | None:
+        """The ROS 2 way of a publish on an action's goal or cancel topic; None for any other topic."""
+        found = action_of(topic)
+        if found is None:
+            return None
+        action, suffix = found
+        if suffix == "goal":
+            return self._send(action, str(msg["goal_id"]["id"]), msg["goal"])
+        goal_id = str(msg.get("id") or "")
+        uuid = next((bytes.fromhex(u) for u, ours in self.uuids.items() if ours == goal_id), None) if goal_id else None
+        request = cancel_request(list(uuid) if uuid else None, time.time() if goal_id and not uuid else None)
+        ros = self.ros()
+        if ros is None:
+            return {"ok": False, "error_code": "offline", "error": "robot offline"}
+        reply = await call_service(ros, action.name + ri.ACTION_CANCEL_SUFFIX, ri.ACTION_CANCEL_TYPE, request,
+                                   self.timeout_s)
+        return {"ok": True} if reply["ok"] else reply
+
+    def _send(self, action: ri.Action, goal_id: str, goal: dict[str, Any]) -> LinkReply:
+        ros = LinkRos(self.url)
+        self._connections[goal_id] = ros
+        self._unmatched.append((time.time(), goal_id))
+
+        def done(_: Any) -> None:
+            self._connections.pop(goal_id, None)
+            close_quietly_later(ros)
+
+        roslibpy.ActionClient(ros, action.name, action.type).send_goal(
+            roslibpy.Goal(goal_args(action, goal)), done, lambda feedback: None, done)
+        return {"ok": True}
+
+    def name_goals(self, msg: dict[str, Any]) -> dict[str, Any]:
+        """A status message in the model, our goals under our ids (learning rosbridge's UUIDs for them)."""
+        for status in msg.get("status_list", []):
+            gid = status["goal_id"]["id"]
+            if gid not in self.uuids and self._unmatched and status["status"] in (0, 1):
+                self.uuids[gid] = self._unmatched.popleft()[1]
+            if gid in self.uuids:
+                status["goal_id"]["id"] = self.uuids[gid]
+        return msg
+
+    def close(self) -> None:
+        for ros in self._connections.values():
+            close_quietly_later(ros)
+        self._connections.clear()
+
+
+def close_quietly_later(ros: roslibpy.Ros) -> None:
+    import threading
+
+    threading.Thread(target=close_quietly, args=(ros,), daemon=True).start()
+
+
+__all__ = ["Ros2Goals", "goal_id_from_uuid"]
