@@ -253,12 +253,17 @@ def _fresh_layer_and_store(_private_redis_prefix):
 
 
 @pytest.fixture
-def sim():
-    """A simulated Cyborg on a free port, in a thread of its own."""
+def sim(request):
+    """A simulated Cyborg on a free port, in a thread of its own; parametrize it (indirect) with 2 for
+    a ROS 2 robot (``EITHER_ROS``)."""
     from simulator.harness import SimThread
 
-    with SimThread(port=0, video_port=0, startup_s=0.5) as running:
+    with SimThread(port=0, video_port=0, startup_s=0.5, ros=getattr(request, "param", 1)) as running:
         yield running
+
+
+# Robot-facing tests whose behaviour depends on the robot's ROS run against both.
+EITHER_ROS = pytest.mark.parametrize("sim", [1, 2], indirect=True, ids=["ros1", "ros2"])
 
 
 async def hosted_link(url: str, settings, *, timeout: float = 10):
@@ -321,6 +326,7 @@ def link_thread(sim, settings):
     settings.ROSBRIDGE_URL = sim.url
     runner = LinkThread()
     runner.start()
+    wait_until(lambda: runner.link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     yield runner.link
     runner.stop()
 
