@@ -278,8 +278,14 @@ def topic_by_name(name: str) -> Topic | None:
     return next((t for t in topics() if t.name == name), None)
 
 
-# A global ROS 1 graph name: "/" then tokens of a letter followed by letters, digits and "_".
-_TOPIC_NAME = re.compile(r"(/[A-Za-z][A-Za-z0-9_]*)+")
+# A global graph name: "/" then tokens of a letter followed by letters, digits and "_"; ROS 2's hidden
+# tokens start with "_" (/navigate_to_pose/_action/status): readable, never written by the product.
+_TOPIC_NAME = re.compile(r"(/_?[A-Za-z][A-Za-z0-9_]*)+")
+
+
+def is_hidden(name: str) -> bool:
+    """A ROS 2 hidden name (an action's status, feedback or services): watched, never published to."""
+    return "/_" in name
 TOPIC_NAME_MAX = 255
 
 
@@ -291,7 +297,7 @@ def topic_name_problem(name: object) -> str | None:
         return f"a topic name has at most {TOPIC_NAME_MAX} characters"
     if not _TOPIC_NAME.fullmatch(name):
         return (f"{name[:80]!r} is not a ROS topic name (like /robot_pose: a leading /, then words of "
-                "letters, digits and _ that start with a letter)")
+                "letters, digits and _ that start with a letter, or with _ and a letter on ROS 2)")
     return None
 
 

@@ -105,6 +105,9 @@ class Serving(Subscriptions):
         if op == "estop":
             return {"ok": True}
         if op == "publish":
+            if ri.is_hidden(request["topic"]):
+                return {"ok": False, "error_code": "forbidden",
+                        "error": f"{request['topic']} is a hidden ROS 2 name: it can be watched, never published to"}
             refused = self._held_back(request, request["topic"], request["msg"])
             if refused:
                 return refused

@@ -99,3 +99,20 @@ def test_ros2_messages_become_the_ros1_model():
     assert goal_id_from_uuid("AAECAwQFBgcICQoLDA0ODw==") == bytes(uuid).hex()
     assert GOAL_STATUS_FROM_ROS2[4] == 3
     assert to_model(ri.ROS1, "rosgraph_msgs/Log", {"level": 8}) == {"level": 8}
+
+
+def test_hidden_ros2_names_are_topic_names():
+    assert ri.topic_name_problem("/navigate_to_pose/_action/status") is None
+    assert ri.is_hidden("/navigate_to_pose/_action/status") and not ri.is_hidden("/cmd_vel")
+    assert ri.topic_name_problem("/_1x") is not None
+
+
+async def test_the_link_never_publishes_on_a_hidden_name(link, sim):
+    from robot.link.bus import RobotError, arequest
+
+    name = ri.action("move_base", ri.ROS2).name + ri.ACTION_STATUS_SUFFIX
+    with pytest.raises(RobotError) as refused:
+        await arequest("publish", topic=name, msg_type=ri.ACTION_STATUS_TYPE, msg={"status_list": []})
+    assert "hidden" in str(refused.value)
+    await asyncio.sleep(0.3)
+    assert not sim.received(name)
