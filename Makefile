@@ -6,6 +6,8 @@ BIN := $(VENV)/bin
 PORT ?= 8000
 SIM_PORT ?= 9090
 VIDEO_PORT ?= 8080
+# The simulated robot's ROS: 1, or 2 (Jazzy, rosbridge 2.x, Nav2); the server finds out which.
+ROS ?= 1
 # The server talks to the simulator `make run` starts, unless told otherwise.
 ROSBRIDGE_URL ?= ws://127.0.0.1:$(SIM_PORT)
 VIDEO_URL ?= http://127.0.0.1:$(VIDEO_PORT)
@@ -58,8 +60,8 @@ stack-down:
 run: install
 	$(BIN)/python manage.py migrate --noinput
 	$(BIN)/python manage.py bootstrap
-	@echo "Simulated robot on ws://127.0.0.1:$(SIM_PORT), server talks to $(ROSBRIDGE_URL); open http://127.0.0.1:$(PORT)/"
-	@bash scripts/run.sh '$(BIN)' '$(PORT)' '$(SIM_PORT)' '$(VIDEO_PORT)' '$(ROSBRIDGE_URL)' '$(VIDEO_URL)'
+	@echo "Simulated ROS $(ROS) robot on ws://127.0.0.1:$(SIM_PORT), server talks to $(ROSBRIDGE_URL); open http://127.0.0.1:$(PORT)/"
+	@bash scripts/run.sh '$(BIN)' '$(PORT)' '$(SIM_PORT)' '$(VIDEO_PORT)' '$(ROSBRIDGE_URL)' '$(VIDEO_URL)' '$(ROS)'
 
 # Foxglove's own message decoders, for the front door's tests (test-only, pinned by their lock file).
 FOXGLOVE := tests/frontdoor/foxglove

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # `make run`'s last step: the simulated robot and the server, until Ctrl-C (or a TERM) stops both.
-# Usage: scripts/run.sh BIN PORT SIM_PORT VIDEO_PORT ROSBRIDGE_URL VIDEO_URL
+# Usage: scripts/run.sh BIN PORT SIM_PORT VIDEO_PORT ROSBRIDGE_URL VIDEO_URL [ROS]
 # Both children run in the background and this shell waits on them, so a Ctrl-C reaches its trap at
 # once; the trap stops them and exits 0. (The recipe it replaces trapped INT, TERM and EXIT with
 # `kill 0`, which signalled the shell itself, ran the trap again, and so on until bash overflowed its
 # stack: "make: *** [Makefile:52: run] Segmentation fault" at every Ctrl-C.)
 set -u
-bin=$1 port=$2 sim_port=$3 video_port=$4 rosbridge_url=$5 video_url=$6
+bin=$1 port=$2 sim_port=$3 video_port=$4 rosbridge_url=$5 video_url=$6 ros=${7:-1}
 
-"$bin/python" -m simulator --port "$sim_port" --video-port "$video_port" &
+"$bin/python" -m simulator --port "$sim_port" --video-port "$video_port" --ros "$ros" &
 sim=$!
 ROSBRIDGE_URL=$rosbridge_url VIDEO_URL=$video_url "$bin/daphne" -b 127.0.0.1 -p "$port" server.asgi:application &
 web=$!
