@@ -20,6 +20,26 @@ log = logging.getLogger("uplink_agent.safety")
 ZERO_TWIST = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 RETRY_S = 0.5
 REPEAT_S = 0.1  # the zero is sent twice, this far apart
+# When the robot's rosapi cannot say; ROS 2 names it geometry_msgs/msg/Twist and takes this spelling too.
+DEFAULT_TWIST_TYPE = "geometry_msgs/Twist"
+
+
+async def topic_type(socket, topic, default=DEFAULT_TWIST_TYPE):
+    """The type the robot gives ``topic`` (rosapi), so the stop is advertised as the robot spells it."""
+    socket.send_frame(ws.TEXT, json.dumps({"op": "call_service", "id": "agent_topic_type",
+                                           "service": "/rosapi/topic_type", "args": {"topic": topic}}).encode())
+    while True:
+        kind, payload = await socket.recv()
+        if kind != ws.TEXT:
+            continue
+        try:
+            frame = json.loads(payload.decode("utf-8"))
+        except ValueError:
+            continue
+        if frame.get("op") == "service_response" and frame.get("id") == "agent_topic_type":
+            values = frame.get("values")
+            found = values.get("type") if frame.get("result") and isinstance(values, dict) else ""
+            return found or default
 
 
 def moving(twist):
@@ -38,6 +58,7 @@ class LocalGuard:
         self.topic = topic
         self.socket = None
         self.stops = 0
+        self.twist_type = DEFAULT_TWIST_TYPE
 
     async def run(self):
         parts = urlsplit(self.rosbridge_url)
@@ -46,8 +67,13 @@ class LocalGuard:
             try:
                 reader, writer = await asyncio.wait_for(asyncio.open_connection(host, port), 3)
                 socket = await asyncio.wait_for(ws.handshake(reader, writer, parts.netloc, parts.path or "/"), 3)
+                try:
+                    twist_type = await asyncio.wait_for(topic_type(socket, self.topic), 3)
+                except asyncio.TimeoutError:
+                    twist_type = DEFAULT_TWIST_TYPE
+                self.twist_type = twist_type
                 socket.send_frame(ws.TEXT, json.dumps({"op": "advertise", "topic": self.topic,
-                                                       "type": "geometry_msgs/Twist"}).encode())
+                                                       "type": twist_type}).encode())
                 self.socket = socket
                 log.info("safety session open on %s", self.rosbridge_url)
                 while True:
