@@ -52,6 +52,7 @@ class RobotLink(Serving):
         self.connecting_until = time.time() + FIRST_CONNECT_S
         self._coalescer = Coalescer(self._send_update, loop=self.loop)
         self.guard = CmdVelGuard(self._publish_zero, loop=self.loop, **self._guard_settings)
+        self.nav2.on_status = self._goal_status
         await self._sync_latch()
         for hook in _start_hooks:
             hook(self)

@@ -7,7 +7,8 @@ client's next frame only after its goal ends: on the link's socket a goal would 
 publish, the E-STOP's zero included), and every cancel as a call of the hidden
 ``<action>/_action/cancel_goal`` service (a ``cancel_action_goal`` on the goal's socket would wait
 for the goal to end). Goal status comes from ``<action>/_action/status``; the UUID rosbridge gave
-our goal is learnt there (the first new goal after ours was sent) and shown under our id.
+our goal is learnt there (the first new goal after ours was sent) and shown under our id. The goal's
+feedback (distance and time remaining) and result reach the model as that goal's status and its text.
 """
 
 from __future__ import annotations
@@ -15,13 +16,13 @@ from __future__ import annotations
 import collections
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import roslibpy
 
 from robot import interface as ri
-from robot.link.dialect import goal_id_from_uuid
+from robot.link.dialect import GOAL_STATUS_FROM_ROS2, goal_id_from_uuid
 from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live.groups import LinkReply
 
@@ -47,6 +48,15 @@ def goal_args(action: ri.Action, goal: dict[str, Any]) -> dict[str, Any]:
     return goal
 
 
+def progress_text(feedback: dict[str, Any]) -> str:
+    """What NavigateToPose's feedback says about the way left, for people."""
+    left = feedback.get("estimated_time_remaining") or {}
+    seconds = float(left.get("sec", 0) or 0) + float(left.get("nanosec", 0) or 0) / 1e9
+    if "distance_remaining" not in feedback:
+        return ""
+    return f"{float(feedback['distance_remaining']):.1f} m to go, about {seconds:.0f} s"
+
+
 def cancel_request(uuid: list[int] | None, before: float | None = None) -> dict[str, Any]:
     """action_msgs/CancelGoal: a zero UUID and stamp cancel every goal; a zero UUID and a stamp, those
     accepted up to it; a UUID, that goal."""
@@ -65,6 +75,8 @@ class Ros2Goals:
         self.uuids: dict[str, str] = {}  # rosbridge's UUID (hex) -> our goal id
         self._unmatched: collections.deque[tuple[float, str]] = collections.deque()  # (sent at, our id)
         self._connections: dict[str, roslibpy.Ros] = {}
+        # Where a goal's status in the model goes (the link's own message path; from the reactor's thread).
+        self.on_status: Callable[[dict[str, Any]], None] = lambda msg: None
 
     async def publish(self, topic: str, msg: dict[str, Any]) -> LinkReply | None:
         """The ROS 2 way of a publish on an action's goal or cancel topic; None for any other topic."""
@@ -89,18 +101,32 @@ class Ros2Goals:
         self._connections[goal_id] = ros
         self._unmatched.append((time.time(), goal_id))
 
-        def done(_: Any) -> None:
+        def status(code: int, text: str) -> None:
+            self.on_status({"status_list": [{"goal_id": {"id": goal_id, "stamp": {"secs": 0, "nsecs": 0}},
+                                             "status": code, "text": text}]})
+
+        def feedback(values: Any) -> None:
+            if goal_id in self._connections:
+                status(1, progress_text(dict(values)))
+
+        def done(result: Any) -> None:
             self._connections.pop(goal_id, None)
             close_quietly_later(ros)
+            code = result.get("status") if isinstance(result, Mapping) else None  # errback: a text
+            if code is not None:
+                status(GOAL_STATUS_FROM_ROS2.get(int(getattr(code, "value", code) or 0), 9), "")
 
         roslibpy.ActionClient(ros, action.name, action.type).send_goal(
-            roslibpy.Goal(goal_args(action, goal)), done, lambda feedback: None, done)
+            roslibpy.Goal(goal_args(action, goal)), done, feedback, done)
         return {"ok": True}
 
     def name_goals(self, msg: dict[str, Any]) -> dict[str, Any]:
         """A status message in the model, our goals under our ids (learning rosbridge's UUIDs for them)."""
+        ours = set(self.uuids.values()) | {gid for _, gid in self._unmatched}
         for status in msg.get("status_list", []):
             gid = status["goal_id"]["id"]
+            if gid in ours:
+                continue
             if gid not in self.uuids and self._unmatched and status["status"] in (0, 1):
                 self.uuids[gid] = self._unmatched.popleft()[1]
             if gid in self.uuids:

@@ -49,6 +49,11 @@ def array_topics() -> frozenset[str]:
 
 
 class Subscriptions(Upkeep):
+    def _goal_status(self, msg: dict[str, Any]) -> None:
+        """A ROS 2 goal's status from its own connection, into the model as the robot's status topic."""
+        self._threadsafe(self._on_message, ri.topic("move_base_status").name, "actionlib_msgs/GoalStatusArray", msg,
+                         time.time())
+
     def _on_ready(self, at: float) -> None:
         super()._on_ready(at)
         if not self._stopped and ri.configured_ros() is None:

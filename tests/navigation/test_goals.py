@@ -40,6 +40,9 @@ def test_it_stops_the_robot_on_cancel(nav_link, sim, operator_api):
     assert res.status_code == 200, res.json()
     wait_goal_state(operator_api, "active")
     wait_until(lambda: abs(sim.snapshot()["state"]["v"]) > 0.05, what="the robot to drive")
+    if sim.robot.ros == ri.ROS2:  # Nav2's feedback: the way left, on the Map
+        wait_until(lambda: "m to go" in operator_api.get("/api/navigation/status/").json()["goal"]["status_text"],
+                   what="the distance left in the goal's status")
     res = operator_api.post("/api/navigation/cancel/", format="json")
     assert res.status_code == 200, res.json()
     assert res.json()["goal"]["status"] in ("cancelling", "cancelled")
