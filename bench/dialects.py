@@ -53,9 +53,10 @@ async def update_latencies(stack: Stack) -> list[float]:
             raw = await asyncio.wait_for(ws.recv(), 10)
             now = time.time()
             frame = json.loads(raw)
-            if frame.get("kind") == "update" and frame.get("key") == "odom":
-                stamp = frame["msg"]["header"]["stamp"]
-                out.append((now - stamp["secs"] - stamp["nsecs"] / 1e9) * 1000)
+            for update in frame.get("updates") or ([frame] if frame.get("kind") == "update" else []):
+                if update.get("key") == "odom":
+                    stamp = update["msg"]["header"]["stamp"]
+                    out.append((now - stamp["secs"] - stamp["nsecs"] / 1e9) * 1000)
     return sorted(out[5:])  # the first frames are the snapshot replay
 
 

@@ -160,6 +160,7 @@ function renderStatus(s) {
     const since = s.since ? formatAge(Date.now() / 1000 - s.since) : "";
     set("link.detail", state.why || (s.connected ? `connected ${since}` : `retrying${s.attempts ? ` (attempt ${s.attempts})` : ""}`));
     if (s.url) set("link.url", s.uplink ? uplinkText(s.uplink) : s.url);
+    if (s.ros) set("link.ros", `ROS ${s.ros}`);
   }
   document.getElementById("card-connection").classList.toggle("bad", !state.ok);
 }
