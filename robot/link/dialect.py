@@ -41,15 +41,19 @@ def goal_id_from_uuid(uuid: Any) -> str:
     return raw.hex()
 
 
-def _stamps(value: Any) -> Any:
-    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is (large lists of numbers are not walked)."""
+def _stamps(value: Any) -> None:
+    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is, in place (the message is fresh from the
+    wire and ours); lists of numbers (ranges, cells) are not walked."""
     if isinstance(value, dict):
-        if "nanosec" in value and "sec" in value and len(value) == 2:
-            return {"secs": value["sec"], "nsecs": value["nanosec"]}
-        return {k: _stamps(v) for k, v in value.items()}
-    if isinstance(value, list) and value and isinstance(value[0], dict | list):
-        return [_stamps(v) for v in value]
-    return value
+        if "nanosec" in value and len(value) == 2 and "sec" in value:
+            value["secs"], value["nsecs"] = value.pop("sec"), value.pop("nanosec")
+            return
+        for item in value.values():
+            if isinstance(item, dict | list):
+                _stamps(item)
+    elif value and isinstance(value[0], dict | list):
+        for item in value:
+            _stamps(item)
 
 
 def _log(msg: dict[str, Any]) -> dict[str, Any]:
@@ -83,6 +87,6 @@ def to_model(ros: int, msg_type: str, msg: dict[str, Any]) -> dict[str, Any]:
     """A message as the product's model has it (the same message on a ROS 1 robot)."""
     if ros == ri.ROS1:
         return msg
-    msg = _stamps(msg)
+    _stamps(msg)
     convert = _BY_TYPE.get(ri.ros1_spelling(msg_type))
     return convert(msg) if convert is not None else msg
