@@ -107,9 +107,14 @@ def run(ros: int) -> dict[str, list[float]]:
         stack.wait_robot_online()
         time.sleep(2.0)  # the link finds out the ROS and subscribes by its names
         token = call(f"{stack.url}/api/auth/token/", {"username": "otto", "password": PASSWORD})["token"]
-        found = {"update": asyncio.run(update_latencies(stack)), "command": speech_commands(stack, token)[0]}
-        if ros == ri.ROS2:
-            found["goal_to_feedback"], found["estop_to_goal_canceled"] = nav2_goals(stack, token)
+        try:
+            found = {"update": asyncio.run(update_latencies(stack)), "command": speech_commands(stack, token)[0]}
+            if ros == ri.ROS2:
+                found["goal_to_feedback"], found["estop_to_goal_canceled"] = nav2_goals(stack, token)
+        except Exception:
+            log.error("ROS %d: the server's log ends\n%s\nthe simulator's\n%s", ros, stack.log("web")[-3000:],
+                      stack.log("sim")[-2000:])
+            raise
         return found
 
 

@@ -14,7 +14,7 @@ feedback (distance and time remaining) and result reach the model as that goal's
 from __future__ import annotations
 
 import collections
-import logging
+import threading
 import time
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -22,11 +22,9 @@ from typing import Any
 import roslibpy
 
 from robot import interface as ri
-from robot.link.dialect import GOAL_STATUS_FROM_ROS2, goal_id_from_uuid
+from robot.link.dialect import GOAL_STATUS_FROM_ROS2
 from robot.link.rosclient import LinkRos, call_service, close_quietly
 from robot.live.groups import LinkReply
-
-log = logging.getLogger(__name__)
 
 ZERO_UUID = [0] * 16
 NAV2_TYPE = "nav2_msgs/action/NavigateToPose"
@@ -140,9 +138,5 @@ class Ros2Goals:
 
 
 def close_quietly_later(ros: roslibpy.Ros) -> None:
-    import threading
-
+    """Close a goal's connection off the reactor's thread (closing blocks until the reactor has done it)."""
     threading.Thread(target=close_quietly, args=(ros,), daemon=True).start()
-
-
-__all__ = ["Ros2Goals", "goal_id_from_uuid"]
