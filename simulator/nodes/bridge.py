@@ -15,8 +15,6 @@ import random
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from robot import interface as ri
-
 from .. import messages, rawtypes
 from ..bus import Bus, SimNode
 from ..protocol import NoAnswer, ServiceError
