@@ -35,6 +35,8 @@ DECLARED: dict[str, tuple[list[Any], list[Any]]] = {
     "audio.listen.start": ([], [None]),
     "link.reconnect": ([], [None]),
     "audio.talk.start": ([None], []),
+    "frontdoor.publish": ([None], []),
+    "frontdoor.call": ([None], []),
 }
 
 
