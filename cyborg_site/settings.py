@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import os
+import secrets
+import tempfile
 from datetime import timedelta
 from pathlib import Path
 from typing import Any
 
 import dj_database_url
+from redis.asyncio.retry import Retry
+from redis.backoff import NoBackoff
+from redis.exceptions import ConnectionError as RedisConnectionError
 
 from cyborg_site.env import (
     env_bool,
@@ -212,38 +217,36 @@ if env_bool("STATIC_HASHED", False):
         "staticfiles": {"BACKEND": "django.contrib.staticfiles.storage.ManifestStaticFilesStorage"},
     }
 
-# --- Redis: channel layer, Celery broker, latest-state store ---------------------------
-REDIS_URL = env_str("REDIS_URL")
-EMBEDDED = not REDIS_URL  # one process hosts the web server, the robot link and the sampling loop
-if REDIS_URL:
-    from redis.asyncio.retry import Retry
-    from redis.backoff import NoBackoff
-    from redis.exceptions import ConnectionError as RedisConnectionError
+# --- Redis: channel layer, Celery broker, latest-state store, queues, locks, live feed --------
+# Unset, the embedded default: a private Valkey server of this process's own (robot.live.private_server),
+# started on first use on a unix socket in a fresh directory. Either way the same Redis code runs.
+EMBEDDED = not env_str("REDIS_URL")  # one process hosts the web server, the robot link and the sampling loop
+REDIS_URL = env_str("REDIS_URL") or (
+    f"unix://{tempfile.gettempdir()}/cyborg-valkey-{os.getpid()}-{secrets.token_hex(4)}/valkey.sock")
 
-    CHANNEL_LAYERS: dict[str, dict[str, Any]] = {
-        "default": {
-            "BACKEND": "channels_redis.core.RedisChannelLayer",
-            "CONFIG": {
-                # redis-py 8 times socket reads out after 5 s by default, exactly the layer's blocking
-                # receive (BZPOPMIN, 5 s): a quiet channel then raised TimeoutError out of receive().
-                # After a Redis restart its pooled connections are dead: pinged when idle, and a command
-                # that meets one tries again on a fresh one (as robot.live.redis_clients does).
-                "hosts": [{"address": REDIS_URL, "socket_timeout": 15, "socket_connect_timeout": 2,
-                           "health_check_interval": 2,
-                           "retry": Retry(NoBackoff(), 1, supported_errors=(RedisConnectionError,))}],
-                "prefix": env_str("CHANNEL_LAYER_PREFIX", "cyborg"),
-                "capacity": 200,
-                "expiry": 10,
-            },
-        }
+CHANNEL_LAYERS: dict[str, dict[str, Any]] = {
+    "default": {
+        # channels_redis's layer, starting the private server first when it is the one configured.
+        "BACKEND": "robot.live.channel_layer.RedisChannelLayer",
+        "CONFIG": {
+            # redis-py 8 times socket reads out after 5 s by default, exactly the layer's blocking
+            # receive (BZPOPMIN, 5 s): a quiet channel then raised TimeoutError out of receive().
+            # After a Redis restart its pooled connections are dead: pinged when idle, and a command
+            # that meets one tries again on a fresh one (as robot.live.redis_clients does).
+            "hosts": [{"address": REDIS_URL, "socket_timeout": 15, "socket_connect_timeout": 2,
+                       "health_check_interval": 2,
+                       "retry": Retry(NoBackoff(), 1, supported_errors=(RedisConnectionError,))}],
+            "prefix": env_str("CHANNEL_LAYER_PREFIX", "cyborg"),
+            "capacity": 200,
+            "expiry": 10,
+        },
     }
-    # Celery's queues under the same prefix as everything else, so deployments can share one Redis.
-    CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
-else:
-    CHANNEL_LAYERS = {"default": {"BACKEND": "channels.layers.InMemoryChannelLayer", "CONFIG": {"capacity": 200}}}
-
-CELERY_BROKER_URL = REDIS_URL or "memory://"
-CELERY_RESULT_BACKEND = REDIS_URL or None
+}
+# Celery's queues under the same prefix as everything else, so deployments can share one Redis.
+CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
+# The embedded default runs no worker: its periodic work runs in the process (history.sampling).
+CELERY_BROKER_URL = "memory://" if EMBEDDED else REDIS_URL
+CELERY_RESULT_BACKEND = None if EMBEDDED else REDIS_URL
 CELERY_TASK_ALWAYS_EAGER = False
 CELERY_TASK_IGNORE_RESULT = True
 CELERY_TIMEZONE = "UTC"

@@ -47,9 +47,7 @@ def check_database() -> Check:
     return Check("database", True)
 
 
-def check_redis() -> Check | None:
-    if not settings.REDIS_URL:
-        return None  # embedded: no Redis in this wiring
+def check_redis() -> Check:
     import redis
 
     # The product's own pooled client: healthy only when what commands use answers.
@@ -57,7 +55,7 @@ def check_redis() -> Check | None:
         redis_clients.client().ping()
     except (redis.ConnectionError, redis.TimeoutError) as exc:
         return Check("redis", False, f"{UNAVAILABLE_TEXT['redis']}: {exc}")
-    return Check("redis", True)
+    return Check("redis", True, "embedded: this process's private server" if settings.EMBEDDED else "")
 
 
 def check_command_path() -> Check | None:

@@ -194,7 +194,7 @@ def _private_redis_prefix():
     """Concurrent test runs on one Redis must not see each other's channels and state."""
     import os
 
-    if django_settings.REDIS_URL:
+    if not django_settings.EMBEDDED:
         django_settings.CHANNEL_LAYERS["default"]["CONFIG"]["prefix"] = f"cyborg-test-{os.getpid()}"
 
 
@@ -238,18 +238,27 @@ def _sync_to_async_connection_closed():
 
 @pytest.fixture(autouse=True)
 def _fresh_layer_and_store(_private_redis_prefix):
-    """Each test gets an empty channel layer and latest-state store."""
+    """Each test gets an empty Redis (channel layer, latest-state store, queues, locks): the embedded
+    pass empties its worker's private server, once a test started it; the services pass deletes its prefix's keys."""
     from robot import interface
-    from robot.live.state import get_store, reset_store
 
     channel_layers.backends = {}
-    reset_store()
-    get_store().clear()
+    _empty_redis()
     interface.reload()
     yield
-    get_store().clear()
-    reset_store()
+    _empty_redis()
     channel_layers.backends = {}
+
+
+def _empty_redis() -> None:
+    from robot.live import private_server, redis_clients
+    from robot.live.state import get_store, reset_store
+
+    reset_store()
+    if not django_settings.EMBEDDED:
+        get_store().clear()
+    elif private_server.running() and private_server.is_private(django_settings.REDIS_URL):
+        redis_clients.client().flushall()
 
 
 @pytest.fixture
@@ -329,11 +338,6 @@ def link_thread(sim, settings):
     wait_until(lambda: runner.link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     yield runner.link
     runner.stop()
-
-
-@pytest.fixture
-def uses_redis():
-    return bool(django_settings.REDIS_URL)
 
 
 class Recorder(BaseHTTPRequestHandler):

@@ -12,9 +12,8 @@ commander's sequences fail from inside the behaviour container, and checks the r
 
 Mode changes are serialised: a second request while one runs is refused with 409 ``Busy``
 rather than queued (an operator who clicked Demo then Manual should see that Demo is still
-being applied, not have Manual fire half a second later). The lock is in-process in the
-embedded default and a redis-py ``Lock`` (expiring just after the longest sequence)
-when ``REDIS_URL`` is set, so it holds across web processes. ``perform_mode`` is the raw
+being applied, not have Manual fire half a second later). The lock is a redis-py ``Lock``
+(expiring just after the longest sequence), so it holds across web processes. ``perform_mode`` is the raw
 work without the lock, role check or audit: the emergency stop composes it and must never
 be refused because a mode change is running.
 """

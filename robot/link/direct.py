@@ -42,7 +42,7 @@ def addresses() -> list[tuple[str, int]]:
 
 
 def enabled() -> bool:
-    return bool(settings.ROBOT_LINK_DIRECT_ADDRESSES) and bool(settings.REDIS_URL)
+    return bool(settings.ROBOT_LINK_DIRECT_ADDRESSES) and not settings.EMBEDDED
 
 
 # --- the link's side ----------------------------------------------------------------------

@@ -1,9 +1,6 @@
-"""How a live update reaches the watching sockets of every web process, serialised once.
-
-Embedded (no ``REDIS_URL``): the link and the web server share the process, so an update goes
-straight into the process's hub. Scaled: it is published once on one Redis pub/sub channel, and
-each web process holds ONE subscription to it that feeds its own hub (``run_subscriber``).
-The channel layer carries no topic updates.
+"""How a live update reaches the watching sockets of every web process, serialised once: it is
+published once on one Redis pub/sub channel, and each web process holds ONE subscription to it that
+feeds its own hub (``run_subscriber``). The channel layer carries no topic updates.
 """
 
 from __future__ import annotations
@@ -15,13 +12,11 @@ import time
 import weakref
 from typing import Any
 
-from django.conf import settings
-
 from robot import interface as ri
 from robot.live import redis_clients
 from robot.live.frames import status_text, update_fragment
 from robot.live.groups import STATUS_KEY
-from robot.live.hub import REDIS_GATHER_S, Hub, get_hub, hubs
+from robot.live.hub import REDIS_GATHER_S, Hub, get_hub
 from robot.live.state import get_store, redis_key
 from robot.supervisor import spawn
 
@@ -59,11 +54,7 @@ async def announce_status(status: dict[str, Any]) -> None:
 
 
 async def _send(key: str, t: float, every: bool, text: str) -> None:
-    if settings.REDIS_URL:
-        await redis_clients.aclient().publish(channel(), f"{key}\n{t!r}\n{int(every)}\n{text}")
-        return
-    for hub in hubs():
-        _offer(hub, key, text, t, every)
+    await redis_clients.aclient().publish(channel(), f"{key}\n{t!r}\n{int(every)}\n{text}")
 
 
 def _offer(hub: Hub, key: str, text: str, t: float, every: bool) -> None:
@@ -74,22 +65,21 @@ def _offer(hub: Hub, key: str, text: str, t: float, every: bool) -> None:
 
 
 async def alocal_hub() -> Hub:
-    """This process's hub. Scaled, once its one Redis subscription is in place (started on first use):
+    """This process's hub, once its one Redis subscription is in place (started on first use):
     pub/sub keeps nothing for a late subscriber, so a page whose first snapshot was read before the
     subscription began could miss an update published in between (a latched topic's only message)."""
     hub = get_hub()
-    if settings.REDIS_URL:
-        hub.gather_s = REDIS_GATHER_S
-        task = _subscribers.get(hub)
-        if task is None or task.done():
-            _ready[hub] = asyncio.Event()
-            _subscribers[hub] = spawn(run_subscriber(hub), loop=hub.loop)
-        try:
-            async with asyncio.timeout(SUBSCRIBE_WAIT_S):
-                await _ready[hub].wait()
-        except TimeoutError:
-            log.warning("live updates: no Redis subscription after %g s; the page gets updates once it is back",
-                        SUBSCRIBE_WAIT_S)
+    hub.gather_s = REDIS_GATHER_S
+    task = _subscribers.get(hub)
+    if task is None or task.done():
+        _ready[hub] = asyncio.Event()
+        _subscribers[hub] = spawn(run_subscriber(hub), loop=hub.loop)
+    try:
+        async with asyncio.timeout(SUBSCRIBE_WAIT_S):
+            await _ready[hub].wait()
+    except TimeoutError:
+        log.warning("live updates: no Redis subscription after %g s; the page gets updates once it is back",
+                    SUBSCRIBE_WAIT_S)
     return hub
 
 

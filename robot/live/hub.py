@@ -61,7 +61,7 @@ class FrameWriter(Protocol):
 # pass what it read through the link (read, the link's coalescer task, the hub). The robot
 # publishes pose and odometry together as two rosbridge frames a few tens of microseconds apart;
 # flushed on the pose alone, the odometry would wait for the writes to every socket, and take a
-# second frame (bench/live_fanout.py). Fed from Redis (scaled),
+# second frame (bench/live_fanout.py). Fed from Redis,
 # updates the link published together arrive as separate messages a Redis round trip or two
 # apart: that hub waits REDIS_GATHER_S so they still share a frame.
 TICK_S = 0.02
@@ -119,7 +119,7 @@ class Hub:
     def __init__(self, loop: asyncio.AbstractEventLoop, *, tick_s: float = TICK_S, gather_s: float = 0.0) -> None:
         self.loop = loop
         self.tick_s = tick_s
-        self.gather_s = gather_s  # how long a fresh update waits for others (scaled: REDIS_GATHER_S)
+        self.gather_s = gather_s  # how long a fresh update waits for others (fed from Redis: REDIS_GATHER_S)
         self.sockets: set[Socket] = set()
         self._watchers: dict[str, set[Socket]] = {}
         self._dirty: set[Socket] = set()
@@ -313,7 +313,3 @@ def get_hub() -> Hub:
         hub = _hubs[loop] = Hub(loop)
     return hub
 
-
-def hubs() -> list[Hub]:
-    """Every live hub of this process (the link may publish from another loop in tests)."""
-    return [hub for loop, hub in list(_hubs.items()) if not loop.is_closed()]

@@ -1,5 +1,4 @@
-"""Every lock across the web processes and the link, in two kinds, each in this process in the
-embedded default and a redis-py ``Lock`` with ``REDIS_URL``:
+"""Every lock across the web processes and the link, in two kinds, each a redis-py ``Lock``:
 
 - a held lock (the drive lock, the talk lock): a person holds it through one connection, refreshes
   it while they act, and it expires after its time-to-live, so a holder who walks away or a
@@ -13,12 +12,10 @@ from __future__ import annotations
 
 import contextlib
 import json
-import threading
-import time
 import uuid
 from collections.abc import AsyncIterator
 from dataclasses import asdict, dataclass
-from typing import Any, Protocol
+from typing import Any
 
 from django.conf import settings
 from redis.exceptions import LockError
@@ -43,72 +40,12 @@ class Holder:
         return cls(owner=str(data["owner"]), username=str(data["username"]))
 
 
-class HeldLock(Protocol):
-    async def holder(self) -> Holder | None: ...
-    async def acquire(self, me: Holder) -> Holder:
-        """Take the lock if it is free (or already mine); return whoever holds it now."""
-    async def refresh(self, me: Holder) -> bool:
-        """Extend my hold; False if I no longer hold the lock."""
-    async def release(self, me: Holder) -> bool:
-        """Free the lock if I hold it."""
-    async def take(self, me: Holder) -> Holder | None:
-        """Take the lock whoever holds it (admin takeover); return the previous holder."""
-    async def clear(self) -> Holder | None:
-        """Free the lock whoever holds it (e-stop); return the previous holder."""
-
-
-class MemoryLock:
-    def __init__(self, ttl_s: float) -> None:
-        self.ttl_s = ttl_s
-        self._holder: Holder | None = None
-        self._expires = 0.0
-
-    def _current(self) -> Holder | None:
-        if self._holder is not None and time.monotonic() >= self._expires:
-            self._holder = None
-        return self._holder
-
-    def _set(self, me: Holder) -> None:
-        self._holder, self._expires = me, time.monotonic() + self.ttl_s
-
-    async def holder(self) -> Holder | None:
-        return self._current()
-
-    async def acquire(self, me: Holder) -> Holder:
-        current = self._current()
-        if current is None or current == me:
-            self._set(me)
-            return me
-        return current
-
-    async def refresh(self, me: Holder) -> bool:
-        if self._current() != me:
-            return False
-        self._set(me)
-        return True
-
-    async def release(self, me: Holder) -> bool:
-        if self._current() != me:
-            return False
-        self._holder = None
-        return True
-
-    async def take(self, me: Holder) -> Holder | None:
-        previous = self._current()
-        self._set(me)
-        return previous
-
-    async def clear(self) -> Holder | None:
-        previous, self._holder = self._current(), None
-        return previous
-
-
-class RedisLock:
+class HeldLock:
     """A held lock on redis-py's ``Lock``, the holder as its token; taking and clearing it whoever
     holds it are plain commands (no lock owns that)."""
 
-    def __init__(self, url: str, key: str, ttl_s: float) -> None:
-        self.url, self.key, self.ttl_s = url, key, ttl_s
+    def __init__(self, key: str, ttl_s: float, url: str | None = None) -> None:
+        self.url, self.key, self.ttl_s = url or settings.REDIS_URL, key, ttl_s
 
     def _client(self) -> Any:
         return redis_clients.aclient(self.url)
@@ -122,6 +59,7 @@ class RedisLock:
         return Holder.decode(await self._client().get(self.key))
 
     async def acquire(self, me: Holder) -> Holder:
+        """Take the lock if it is free (or already mine); return whoever holds it now."""
         for _ in range(3):  # the holder may let go between our two calls
             if await self._lock(me).acquire(token=me.encode()) or await self.refresh(me):
                 return me
@@ -131,6 +69,7 @@ class RedisLock:
         return await self.holder() or me
 
     async def refresh(self, me: Holder) -> bool:
+        """Extend my hold; False if I no longer hold the lock."""
         try:
             await self._lock(me).reacquire()
         except LockError:
@@ -138,6 +77,7 @@ class RedisLock:
         return True
 
     async def release(self, me: Holder) -> bool:
+        """Free the lock if I hold it."""
         try:
             await self._lock(me).release()
         except LockError:
@@ -145,15 +85,17 @@ class RedisLock:
         return True
 
     async def take(self, me: Holder) -> Holder | None:
+        """Take the lock whoever holds it (admin takeover); return the previous holder."""
         return Holder.decode(await self._client().set(self.key, me.encode(), px=int(self.ttl_s * 1000), get=True))
 
     async def clear(self) -> Holder | None:
+        """Free the lock whoever holds it (e-stop); return the previous holder."""
         return Holder.decode(await self._client().getdel(self.key))
 
 
 def held_lock(name: str, ttl_s: float) -> HeldLock:
-    """The held lock ``name`` as this wiring keeps it."""
-    return RedisLock(settings.REDIS_URL, redis_key(name), ttl_s) if settings.REDIS_URL else MemoryLock(ttl_s)
+    """The held lock ``name``."""
+    return HeldLock(redis_key(name), ttl_s)
 
 
 class Taken(Exception):
@@ -164,37 +106,19 @@ class Taken(Exception):
         self.label = label
 
 
-# Views run on several loops and threads: threading locks, not asyncio ones.
-_local: dict[str, threading.Lock] = {}
-_local_labels: dict[str, str] = {}
-
-
 async def is_taken(name: str) -> bool:
-    if settings.REDIS_URL:
-        return bool(await redis_clients.aclient().exists(redis_key(name)))
-    return name in _local and _local[name].locked()
+    return bool(await redis_clients.aclient().exists(redis_key(name)))
 
 
 @contextlib.asynccontextmanager
 async def exclusive(name: str, label: str, *, ttl_s: float) -> AsyncIterator[None]:
     """Be the one inside section ``name`` for the duration, or raise ``Taken`` at once."""
-    if settings.REDIS_URL:
-        lock = redis_clients.aclient().lock(redis_key(name), timeout=ttl_s, blocking=False)
-        if not await lock.acquire(token=f"{uuid.uuid4().hex}:{label}"):
-            held = await lock.redis.get(redis_key(name))
-            raise Taken((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
-        try:
-            yield
-        finally:
-            with contextlib.suppress(LockError):  # expired meanwhile: nothing of ours to release
-                await lock.release()
-        return
-    local = _local.setdefault(name, threading.Lock())
-    if not local.acquire(blocking=False):
-        raise Taken(_local_labels.get(name, ""))
-    _local_labels[name] = label
+    lock = redis_clients.aclient().lock(redis_key(name), timeout=ttl_s, blocking=False)
+    if not await lock.acquire(token=f"{uuid.uuid4().hex}:{label}"):
+        held = await lock.redis.get(redis_key(name))
+        raise Taken((held.decode() if isinstance(held, bytes) else held or "").partition(":")[2])
     try:
         yield
     finally:
-        _local_labels.pop(name, None)
-        local.release()
+        with contextlib.suppress(LockError):  # expired meanwhile: nothing of ours to release
+            await lock.release()

@@ -9,6 +9,8 @@ restarts or freezes:
 - an asyncio client belongs to the event loop that first used it: one per loop and URL.
 
 Blocking reads (a list pop, a pub/sub subscription) ask for a longer socket timeout.
+In the embedded default the configured Redis is the process's private server, started here on first
+use (robot.live.private_server).
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ import weakref
 from typing import Any
 
 from django.conf import settings
+
+from robot.live import private_server
 
 COMMAND_TIMEOUT_S = 1.0
 CONNECT_TIMEOUT_S = 0.5
@@ -51,7 +55,7 @@ def aclient(url: str | None = None, *, blocking_s: float | None = None) -> Any:
     the longest a blocking read on it waits."""
     import redis.asyncio
 
-    url = url or settings.REDIS_URL
+    url = _started(url)
     per_loop = _aclients.setdefault(asyncio.get_running_loop(), {})
     client = per_loop.get((url, blocking_s))
     if client is None:
@@ -65,7 +69,7 @@ def client(url: str | None = None) -> Any:
     """The process's client for synchronous code (its pool is shared by threads)."""
     import redis
 
-    url = url or settings.REDIS_URL
+    url = _started(url)
     with _lock:
         found = _clients.get(url)
         if found is None:
@@ -78,4 +82,10 @@ def new_aclient(url: str | None = None, **overrides: Any) -> Any:
     and the live feed's subscription, which waits for messages as long as there are none."""
     import redis.asyncio
 
-    return redis.asyncio.Redis.from_url(url or settings.REDIS_URL, **_options(True, **overrides))
+    return redis.asyncio.Redis.from_url(_started(url), **_options(True, **overrides))
+
+
+def _started(url: str | None) -> str:
+    url = url or settings.REDIS_URL
+    private_server.ensure(url)
+    return url

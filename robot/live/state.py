@@ -1,15 +1,14 @@
 """The latest-state store: the newest message of every monitored topic, plus link status.
 
-In-process (embedded default) or Redis (``REDIS_URL``): the same interface, so the
-dashboard, the API and the history sampler read it the same way.
+In Redis (the embedded default's private server or ``REDIS_URL``), so the dashboard, the API, the
+history sampler and the link of any process read and write the same values.
 """
 
 from __future__ import annotations
 
 import json
 import time
-from collections import deque
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from django.conf import settings
@@ -27,57 +26,13 @@ def jsonable(value: Any) -> Any:
     raise TypeError(f"Object of type {type(value).__name__} is not JSON serializable")
 
 
-class StateStore(Protocol):
-    async def aput(self, key: str, entry: dict[str, Any]) -> None: ...
-    async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]: ...
-    def get_all(self) -> dict[str, dict[str, Any]]: ...
-    def put(self, key: str, entry: dict[str, Any]) -> None: ...
-    def clear(self) -> None: ...
-    async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None: ...
-    async def aget_recent(self, key: str) -> list[dict[str, Any]]: ...
-    def get_recent(self, key: str) -> list[dict[str, Any]]: ...
+class StateStore:
+    """A Redis hash of the newest entry per key under ``name``, and a capped list per key of the recent ones."""
 
-
-class MemoryStore:
-    def __init__(self) -> None:
-        self._data: dict[str, dict[str, Any]] = {}
-        self._recent: dict[str, deque[dict[str, Any]]] = {}
-
-    async def aappend_recent(self, key: str, entry: dict[str, Any], maxlen: int) -> None:
-        ring = self._recent.get(key)
-        if ring is None or ring.maxlen != maxlen:
-            ring = self._recent[key] = deque(ring or (), maxlen=maxlen)
-        ring.append(entry)
-
-    async def aget_recent(self, key: str) -> list[dict[str, Any]]:
-        return list(self._recent.get(key, ()))
-
-    def get_recent(self, key: str) -> list[dict[str, Any]]:
-        return list(self._recent.get(key, ()))
-
-    async def aput(self, key: str, entry: dict[str, Any]) -> None:
-        self._data[key] = entry
-
-    def put(self, key: str, entry: dict[str, Any]) -> None:
-        self._data[key] = entry
-
-    async def aget_many(self, keys: list[str]) -> dict[str, dict[str, Any]]:
-        return {k: self._data[k] for k in keys if k in self._data}
-
-    def get_all(self) -> dict[str, dict[str, Any]]:
-        return dict(self._data)
-
-    def clear(self) -> None:
-        self._data.clear()
-        self._recent.clear()
-
-
-class RedisStore:
-    def __init__(self, url: str, name: str) -> None:
-
+    def __init__(self, name: str, url: str | None = None) -> None:
         self._name = name
-        self._sync = redis_clients.client(url)
-        self._url = url
+        self._url = url or settings.REDIS_URL
+        self._sync = redis_clients.client(self._url)
 
     def _aclient(self) -> Any:
         return redis_clients.aclient(self._url)
@@ -125,10 +80,7 @@ _store: StateStore | None = None
 def get_store() -> StateStore:
     global _store
     if _store is None:
-        if settings.REDIS_URL:
-            _store = RedisStore(settings.REDIS_URL, redis_key("latest-state"))
-        else:
-            _store = MemoryStore()
+        _store = StateStore(redis_key("latest-state"))
     return _store
 
 

@@ -140,9 +140,9 @@ def _offline_on(engine: alerts_engine.AlertEngine) -> bool:
 
 def test_the_first_start_is_no_outage_until_the_robot_had_time_to_come_up():
     from robot.link.connection import RobotLink
-    from robot.live.state import MemoryStore
+    from robot.live.state import get_store
 
-    link = RobotLink("ws://127.0.0.1:9", store=MemoryStore(), layer=None, request_queue="unused")
+    link = RobotLink("ws://127.0.0.1:9", store=get_store(), layer=None, request_queue="unused")
     engine = alerts_engine.AlertEngine(link)
     t0 = 1_000_000.0
     for dt in (0.0, 3.0, 10.0, 25.0):  # a simulator still starting
@@ -154,9 +154,9 @@ def test_the_first_start_is_no_outage_until_the_robot_had_time_to_come_up():
 
 def test_a_robot_that_was_connected_is_offline_after_the_blink_grace():
     from robot.link.connection import RobotLink
-    from robot.live.state import MemoryStore
+    from robot.live.state import get_store
 
-    link = RobotLink("ws://127.0.0.1:9", store=MemoryStore(), layer=None, request_queue="unused")
+    link = RobotLink("ws://127.0.0.1:9", store=get_store(), layer=None, request_queue="unused")
     engine = alerts_engine.AlertEngine(link)
     link.connected = True
     engine.tick(1_000_000.0)

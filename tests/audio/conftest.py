@@ -8,12 +8,10 @@ def _free_talk_lock(settings):
 
     def clear():
         reset_talk_lock()
-        if settings.REDIS_URL:
-            import redis
+        from robot.live import redis_clients
+        from robot.live.state import redis_key
 
-            from robot.live.state import redis_key
-
-            redis.Redis.from_url(settings.REDIS_URL).delete(redis_key("talk-lock"))
+        redis_clients.client().delete(redis_key("talk-lock"))
 
     clear()
     yield

@@ -8,7 +8,6 @@ must walk the state machine to suspension first either way.
 from __future__ import annotations
 
 import itertools
-import os
 
 import pytest
 
@@ -82,8 +81,6 @@ def enter(sim, events: tuple[str, ...]) -> str:
     return sim.call(fire)
 
 
-@pytest.mark.skipif(bool(os.environ.get("REDIS_URL")),
-                    reason="the way out does not depend on the store; the circuit above covers Redis")
 async def test_every_mode_is_reached_from_inside_behaviour(link, sim, strategy):
     wait_ready(sim)
     await until_the_server_hears(lambda s: s == "suspension", "suspension")

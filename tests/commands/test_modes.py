@@ -7,6 +7,7 @@ import pytest
 from robot import interface as ri
 from robot.commands import modes
 from robot.commands.pipeline import Busy
+from robot.live import redis_clients
 from robot.live.state import redis_key
 from tests.commands.support import received, until_the_server_hears, wait_ready
 from tests.helpers import async_wait_until, receive_until, ws_communicator
@@ -29,7 +30,7 @@ def test_it_counts_behaviours_inner_states_as_behaviour(mode, state, reached):
     assert modes.state_reached(mode, state) is reached
 
 
-async def test_it_holds_one_mode_change_at_a_time(uses_redis):
+async def test_it_holds_one_mode_change_at_a_time():
     async with modes.serialised(ri.Mode.BEHAVIOUR):
         with pytest.raises(Busy, match="A mode change to behaviour is already in progress"):
             async with modes.serialised(ri.Mode.MANUAL):
@@ -38,13 +39,8 @@ async def test_it_holds_one_mode_change_at_a_time(uses_redis):
         pass
 
 
-@pytest.mark.redis
-async def test_it_lets_the_redis_lock_expire_if_its_holder_dies(settings):
-    import redis.asyncio
-
-    if not settings.REDIS_URL:
-        pytest.skip("needs REDIS_URL")
-    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+async def test_it_lets_the_redis_lock_expire_if_its_holder_dies():
+    client = redis_clients.new_aclient()
     try:
         async with modes.serialised(ri.Mode.DEMO):
             ttl_ms = await client.pttl(redis_key(modes.LOCK))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from robot.commands.statewatch import StateWatch, leaf_from_smach
 from robot.live.groups import STATUS_KEY
-from robot.live.state import MemoryStore
+from robot.live.state import StateStore, get_store
 
 
 def smach(t: float, path: str, *active: str) -> dict:
@@ -15,8 +15,8 @@ def change(t: float, event: str, old: str, new: str) -> dict:
     return {"t": t, "msg": {"event": event, "from_system_state": old, "to_system_state": new}}
 
 
-async def filled(*, since: float | None, changes=(), statuses=()) -> MemoryStore:
-    store = MemoryStore()
+async def filled(*, since: float | None, changes=(), statuses=()) -> StateStore:
+    store = get_store()
     if since is not None:
         await store.aput(STATUS_KEY, {"connected": True, "since": since})
     for entry in changes:

@@ -2,11 +2,7 @@
 
 import asyncio
 
-import pytest
 from channels.layers import get_channel_layer
-from django.conf import settings
-
-pytestmark = [pytest.mark.redis, pytest.mark.skipif(not settings.REDIS_URL, reason="needs REDIS_URL")]
 
 
 async def test_a_receive_waits_quietly_past_the_blocking_pop_and_still_gets_the_message():

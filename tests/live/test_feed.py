@@ -1,16 +1,11 @@
-"""Scaled wiring: each web process's one Redis subscription feeds its hub. A page is subscribed
+"""Each web process's one Redis subscription feeds its hub. A page is subscribed
 before it reads its first snapshot, and nothing published while the subscription was down is lost."""
 
-import pytest
-import redis.asyncio
-from django.conf import settings
 
-from robot.live import feed
+from robot.live import feed, redis_clients
 from robot.live.announce import aannounce, server_update
 from robot.live.hub import get_hub
 from tests.helpers import async_wait_until, receive_until, ws_communicator
-
-pytestmark = [pytest.mark.redis, pytest.mark.skipif(not settings.REDIS_URL, reason="needs REDIS_URL")]
 
 
 async def _open(user, keys):
@@ -25,7 +20,7 @@ async def test_the_process_is_subscribed_by_the_time_a_page_is_open(viewer):
     page = ws_communicator(viewer)
     assert (await page.connect(timeout=10))[0]
     await receive_until(page, lambda f: f["kind"] == "status")
-    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    client = redis_clients.new_aclient()
     try:
         [(_, subscribers)] = await client.pubsub_numsub(feed.channel())
     finally:
@@ -38,7 +33,7 @@ async def test_what_was_published_while_the_subscription_was_down_still_reaches_
     page = await _open(viewer, ["nav_goal", "rosout"])
     await aannounce("rosout", dict(server_update("rosout", {"msg": "before"})))
     await receive_until(page, lambda f: f.get("key") == "rosout")
-    client = redis.asyncio.Redis.from_url(settings.REDIS_URL)
+    client = redis_clients.new_aclient()
     try:
         ours = [c for c in await client.client_list() if c.get("name") == feed.SUBSCRIBER_NAME]
         assert ours

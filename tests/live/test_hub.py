@@ -4,9 +4,8 @@ import asyncio
 import json
 
 import pytest
-from django.conf import settings
 
-from robot.live import feed, frames
+from robot.live import feed, frames, redis_clients
 from robot.live.announce import aannounce, apublish_state, server_update
 from robot.live.hub import Hub, get_hub
 from tests.helpers import async_wait_until, receive_until, ws_communicator
@@ -128,15 +127,13 @@ async def test_the_first_snapshot_never_replaces_a_newer_live_value(viewer, monk
         await aannounce("nav_goal", dict(server_update("nav_goal", {"x": "live"}, t=200.0)), keep=False)
         return entries
 
-    if settings.REDIS_URL:  # scaled: the process's one subscription must be up to hear the live value
-        import redis
-
-        client = redis.Redis.from_url(settings.REDIS_URL)
-        await async_wait_until(lambda: client.pubsub_numsub(feed.channel())[0][1] >= 1, timeout=5)
+    # The process's one subscription must be up to hear the live value.
+    client = redis_clients.client()
+    await async_wait_until(lambda: client.pubsub_numsub(feed.channel())[0][1] >= 1, timeout=5)
     monkeypatch.setattr(store, "aget_many", read_then_a_newer_value_arrives)
     await communicator.send_json_to({"action": "watch", "keys": ["nav_goal"]})
     seen = [(await receive_until(communicator, lambda f: f["kind"] == "update"))["msg"]]
-    while seen[-1] != {"x": "live"}:  # scaled, the live value comes back through Redis after the read
+    while seen[-1] != {"x": "live"}:  # the live value comes back through Redis after the read
         seen.append((await receive_until(communicator, lambda f: f["kind"] == "update"))["msg"])
     # The page ends on the newest value: the older stored one never arrives after it.
     assert not communicator.__dict__.get("_unbatched") and await communicator.receive_nothing(timeout=0.5)

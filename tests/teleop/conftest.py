@@ -8,12 +8,10 @@ def _free_drive_lock(settings):
 
     def clear():
         reset_lock()
-        if settings.REDIS_URL:
-            import redis
+        from robot.live import redis_clients
+        from robot.live.state import redis_key
 
-            from robot.live.state import redis_key
-
-            redis.Redis.from_url(settings.REDIS_URL).delete(redis_key("teleop-lock"))
+        redis_clients.client().delete(redis_key("teleop-lock"))
 
     clear()
     yield

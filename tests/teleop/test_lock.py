@@ -1,4 +1,4 @@
-"""The drive lock, in-process and on Redis: one holder, refresh/release by the holder only,
+"""The drive lock on Redis: one holder, refresh/release by the holder only,
 admin takeover, e-stop clear, expiry."""
 
 import asyncio
@@ -6,30 +6,19 @@ import uuid
 
 import pytest
 
-from robot.live.locks import Holder, MemoryLock, RedisLock
+from robot.live.locks import HeldLock, Holder
 
 OTTO = Holder(owner="chan.otto", username="otto")
 OLGA = Holder(owner="chan.olga", username="olga")
 OTTO_OTHER_TAB = Holder(owner="chan.otto2", username="otto")
-REDIS = "redis://127.0.0.1:6379/15"
 
 
-@pytest.fixture(params=["memory", pytest.param("redis", marks=pytest.mark.redis)])
-async def make_lock(request):
-    keys = []
-
+@pytest.fixture
+def make_lock():
     def make(ttl_s: float = 30.0):
-        if request.param == "memory":
-            return MemoryLock(ttl_s)
-        key = f"test:teleop-lock:{uuid.uuid4().hex}"
-        keys.append(key)
-        return RedisLock(REDIS, key, ttl_s)
+        return HeldLock(f"test:teleop-lock:{uuid.uuid4().hex}", ttl_s)
 
-    yield make
-    if keys:
-        import redis
-
-        redis.Redis.from_url(REDIS).delete(*keys)
+    return make
 
 
 async def test_it_gives_the_lock_to_one_holder_at_a_time(make_lock):

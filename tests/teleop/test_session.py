@@ -9,7 +9,7 @@ import asyncio
 import pytest
 
 from robot.link.bus import RobotOffline
-from robot.live.locks import Holder, MemoryLock
+from robot.live.locks import HeldLock, Holder, held_lock
 from robot.teleop.session import NotHolding, TeleopSession, halt_all
 from robot.teleop.twist import Command
 from tests.helpers import async_wait_until
@@ -18,7 +18,7 @@ FORWARD = Command(linear=0.3, angular=0.0)
 
 
 def session(name: str, sent: list[Command], told: list[tuple[str, object]] | None = None,
-            fail: bool = False) -> tuple[TeleopSession, MemoryLock]:
+            fail: bool = False) -> tuple[TeleopSession, HeldLock]:
     async def publish(command: Command) -> None:
         if fail:
             raise RobotOffline("Robot offline: no connection")
@@ -28,7 +28,7 @@ def session(name: str, sent: list[Command], told: list[tuple[str, object]] | Non
         if told is not None:
             told.append((kind, detail))
 
-    lock = MemoryLock(ttl_s=5)
+    lock = held_lock(f"test-drive-lock-{name}", ttl_s=5)
     return TeleopSession(Holder(owner=name, username=name), lock=lock, publish=publish, listener=listener,
                          rate_hz=20, deadman_s=5), lock
 

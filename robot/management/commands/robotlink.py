@@ -46,7 +46,7 @@ class Command(BaseCommand):
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, self._stop_requested, stop)
-        if not settings.REDIS_URL:
+        if settings.EMBEDDED:  # its own private Redis: no other link shares a lease with it
             link, tasks = await start_link(embedded=False)
             self._say(f"Robot link running for {link.url}; Ctrl-C to stop.")
             await stop.wait()
