@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole suite: lint and types, then the tests on two wirings, spread over parallel workers:
-#   embedded  SQLite + in-memory channel layer: every test;
+#   embedded  SQLite + a private Valkey server per process: every test;
 #   services  PostgreSQL + Redis: the tests that depend on that wiring (tests/wiring.py says which).
 # The browser tests run on two workers (two groups: one stack and Chromium each). Ends with line and
 # branch coverage of all runs together and the time each part took. Arguments go to every pytest run (scripts/test.sh tests/teleop -x).
@@ -67,7 +67,7 @@ status=0
 lint_start=$SECONDS
 (lint > "$LOGS/lint.log" 2>&1; echo $? > "$LOGS/lint.status"; echo $((SECONDS - lint_start)) > "$LOGS/lint.s")&
 lint_pid=$!
-part "Embedded default: SQLite + in-memory channel layer, all but the browser tests" \
+part "Embedded default: SQLite + private Valkey, all but the browser tests" \
   embedded run_pytest embedded -m "not browser" -n "$WORKERS" "$@" || status=1
 part "Embedded default: the browser tests (headless Chromium, two groups)" \
   embedded run_pytest browser -m browser -n 2 --dist loadgroup "$@" || status=1

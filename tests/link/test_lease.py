@@ -8,16 +8,12 @@ import random
 
 import pytest
 import redis
-from django.conf import settings
 
 from robot import interface as ri
 from robot.link.lease import Lease
 from tests.helpers import async_wait_until
 from tests.support_processes import PrivateRedis
 
-# Leases exist only when scaled: run with the services pass (on a redis-server of their own all the same).
-pytestmark = [pytest.mark.redis,
-              pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")]
 KEY = "test:link-lease"
 TTL_S = 2.0  # the default ROBOT_LINK_LEASE_S
 

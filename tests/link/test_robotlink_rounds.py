@@ -9,7 +9,6 @@ import logging
 import types
 
 import pytest
-from django.conf import settings
 from redis.exceptions import ConnectionError as RedisConnectionError
 
 from robot.link import hosting
@@ -22,14 +21,12 @@ from tests.support_processes import PrivateRedis
 @pytest.fixture
 def private_redis(settings):
     server = PrivateRedis().start()
-    settings.REDIS_URL = server.url
+    settings.REDIS_URL, settings.EMBEDDED = server.url, False  # the scaled wiring: a leased link
     settings.ROBOT_LINK_LEASE_S = 0.5
     yield server
     server.stop()
 
 
-@pytest.mark.redis
-@pytest.mark.skipif(not settings.REDIS_URL, reason="the lease is part of the scaled wiring")
 async def test_failed_rounds_are_logged_and_the_link_stands_by_again_its_link_stopped(
         private_redis, monkeypatch, caplog):
     """Round 1: the link fails to start. Round 2: it runs, then renewing the lease fails. Round 3: a stop."""

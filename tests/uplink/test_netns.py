@@ -89,7 +89,7 @@ def _unreachable(host: str, port: int) -> bool:
 def world() -> Iterator[World]:
     side = RobotSide().up()
     ca = TestCA(side.host_ip)
-    redis = PrivateRedis().start() if settings.REDIS_URL else None
+    redis = None if settings.EMBEDDED else PrivateRedis().start()
     sim_port, video_port = free_port(), free_port()
     uplink_port, relay_port, relay_video_port = free_port(), free_port(), free_port()
     stack = Stack(sim=False, redis_url=redis.url if redis else None, env={
