@@ -4,7 +4,8 @@ with no persistence. The product then runs the same Redis code in every wiring; 
 (another manage.py) starts a private server of its own, unless it is handed this one's URL.
 
 It stops when the process exits; should the process be killed outright, the kernel sends the server
-SIGTERM (Linux: the parent-death signal, set by a thread that lives as long as the process).
+SIGTERM (Linux: the parent-death signal, set by a thread that lives as long as the process), and the
+next private server started on the machine removes the directory left behind.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ def ensure(url: str) -> None:
         if running():
             return
         socket_path = Path(urlsplit(url).path)
+        _sweep(socket_path.parent.parent)
         socket_path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         socket_path.unlink(missing_ok=True)
         started: list[subprocess.Popen[bytes]] = []
@@ -91,6 +93,20 @@ def _die_with_parent(parent: int) -> object:
             os._exit(1)
 
     return set_up
+
+
+def _sweep(parent: Path) -> None:
+    """Remove the directories of private servers whose process was killed outright (their server went
+    with them; only the directory is left)."""
+    for found in parent.glob("cyborg-valkey-*"):
+        try:
+            os.kill(int(found.name.split("-")[2]), 0)
+        except (IndexError, ValueError):
+            continue
+        except ProcessLookupError:
+            shutil.rmtree(found, ignore_errors=True)
+        except PermissionError:
+            continue
 
 
 def _binary() -> str:

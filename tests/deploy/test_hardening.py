@@ -20,7 +20,7 @@ from tests.deploy.topology import _TLS, Topology, on_private_services
 
 pytestmark = [
     pytest.mark.stack,
-    pytest.mark.skipif(not settings.REDIS_URL, reason="the production topology runs in the services pass"),
+    pytest.mark.skipif(settings.EMBEDDED, reason="the production topology runs in the services pass"),
 ]
 HSTS = "max-age=60; includeSubDomains; preload"  # the stack's (stack.sh shortens the site's year)
 

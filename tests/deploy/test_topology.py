@@ -30,7 +30,7 @@ from tests.stack import PASSWORD, PYTHON, ROOT
 
 pytestmark = [
     pytest.mark.stack,
-    pytest.mark.skipif(not settings.REDIS_URL, reason="the production topology runs in the services pass"),
+    pytest.mark.skipif(settings.EMBEDDED, reason="the production topology runs in the services pass"),
 ]
 _said = itertools.count()
 RATE_HZ = 10.0  # the simulator's /odom, recorded every message

@@ -54,7 +54,7 @@ def test_daphne_still_fails_closing_a_handshake_autobahn_refused():
     refused_handshakes.on_close_after_connect(WebSocketProtocol(), False, None, None)
 
 
-@pytest.mark.skipif(bool(settings.REDIS_URL), reason="its own processes: runs in the embedded pass")
+@pytest.mark.skipif(not settings.EMBEDDED, reason="its own processes: runs in the embedded pass")
 def test_a_real_daphne_refuses_malformed_hosts_and_origins_with_one_warning_line_each():
     with Stack(sim=False, users=False) as stack:
         # Twisted's log reaches Python logging once the embedded link has started (roslibpy's observer).

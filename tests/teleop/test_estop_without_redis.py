@@ -19,7 +19,7 @@ from tests.helpers import wait_until
 from tests.stack import Stack
 from tests.support_processes import Client, PrivateRedis, online, received
 
-pytestmark = [pytest.mark.redis, pytest.mark.skipif(not settings.REDIS_URL, reason="scaled wiring: services pass")]
+pytestmark = [pytest.mark.redis, pytest.mark.skipif(settings.EMBEDDED, reason="scaled wiring: services pass")]
 
 
 def _zero_after(stack: Stack, pressed: float) -> float | None:
