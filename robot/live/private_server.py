@@ -75,6 +75,8 @@ def _keep(socket_path: Path, started: list[subprocess.Popen[bytes]], failed: lis
              "--save", "", "--appendonly", "no", "--dir", str(socket_path.parent), "--logfile", "",
              "--loglevel", "warning"],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            # Not in the terminal's process group: a Ctrl-C stops the process, which then stops its server.
+            start_new_session=True,
             preexec_fn=_die_with_parent(os.getpid()) if sys.platform == "linux" else None)
     except BaseException as exc:
         failed.append(exc)
