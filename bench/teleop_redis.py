@@ -1,6 +1,7 @@
-"""Redis commands per teleop Twist: a driver holds a key on ``/ws/teleop/`` against the simulator,
-and the Redis server's INFO commandstats count what the product sent meanwhile, less what it sends
-as much while nobody drives (the link storing the robot's topics, heartbeats).
+"""Redis commands per teleop Twist: a driver holds a key on ``/ws/teleop/`` against the simulator
+while MONITOR records every command the Redis server gets. Counted per Twist the robot received:
+all of them (the moving robot's topics stored and published too), and those of the drive itself
+(everything but the latest-state store, the live feed and the link's status).
 
 Two wirings: scaled (Daphne and ``robotlink`` as separate processes sharing a private redis-server)
 and embedded (one Daphne process, its private Valkey server). Prints ``name: value`` lines.
@@ -12,6 +13,7 @@ import asyncio
 import glob
 import json
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -29,9 +31,19 @@ FORWARD = {"type": "input", "linear": 1.0, "angular": 0.0}
 SEND_EVERY_S = 0.05  # the page repeats the held key's input
 
 
-def commands(client: redis.Redis) -> int:
-    stats = client.info("commandstats")
-    return sum(int(v["calls"]) for k, v in stats.items() if k not in ("cmdstat_info",))
+LIVE = (":latest-state", ":live")  # the robot's topics stored and fanned out, whoever drives
+
+
+class Monitor(threading.Thread):
+    def __init__(self, url: str) -> None:
+        super().__init__(daemon=True)
+        self.url, self.commands, self.recording = url, [], False
+
+    def run(self) -> None:
+        with redis.Redis.from_url(self.url).monitor() as monitor:
+            for command in monitor.listen():
+                if self.recording:
+                    self.commands.append(command["command"])
 
 
 def twists(stack: Stack) -> int:
@@ -54,17 +66,18 @@ async def drive(stack: Stack, cookie: str) -> None:
         await asyncio.sleep(0.5)
 
 
-def measure(stack: Stack, client: redis.Redis) -> float:
+def measure(stack: Stack, url: str) -> tuple[float, float]:
     cookie = stack.login_cookie("otto")
+    monitor = Monitor(url)
+    monitor.start()
     time.sleep(2)  # settle: the link subscribed, the first values stored
-    before = commands(client)
-    time.sleep(HOLD_S + 0.5)
-    idle = commands(client) - before - 1  # this INFO call counts too
-    before, sent = commands(client), twists(stack)
+    sent = twists(stack)
+    monitor.recording = True
     asyncio.run(drive(stack, cookie))
-    driven = commands(client) - before - 1
-    moved = twists(stack) - sent
-    return max(0, driven - idle) / max(1, moved)
+    monitor.recording = False
+    moved = max(1, twists(stack) - sent)
+    drive_only = [c for c in monitor.commands if not any(part in c for part in LIVE) and "INFO" not in c]
+    return len(monitor.commands) / moved, len(drive_only) / moved
 
 
 def private_server_of(pid: int) -> str:
@@ -82,15 +95,16 @@ def main() -> None:
     try:
         with Stack(redis_url=server.url) as stack:
             stack.wait_robot_online()
-            scaled = measure(stack, redis.Redis.from_url(server.url))
+            scaled = measure(stack, server.url)
     finally:
         server.stop()
-    print(f"redis_commands_per_twist_scaled: {scaled:.2f}")
+    print(f"redis_commands_per_twist_scaled: {scaled[0]:.2f}")
+    print(f"redis_drive_commands_per_twist_scaled: {scaled[1]:.2f}")
     with Stack() as stack:
         stack.wait_robot_online()
-        client = redis.Redis.from_url(private_server_of(stack.procs[-1].pid))
-        embedded = measure(stack, client)
-    print(f"redis_commands_per_twist_embedded: {embedded:.2f}")
+        embedded = measure(stack, private_server_of(stack.procs[-1].pid))
+    print(f"redis_commands_per_twist_embedded: {embedded[0]:.2f}")
+    print(f"redis_drive_commands_per_twist_embedded: {embedded[1]:.2f}")
 
 
 if __name__ == "__main__":

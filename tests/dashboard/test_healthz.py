@@ -55,6 +55,9 @@ def test_it_gives_a_logged_in_staff_member_the_addresses_and_error_texts(client,
     assert body["robot_url"] == settings.ROSBRIDGE_URL and body["video_url"] == settings.VIDEO_URL
     assert body["checks"]["camera"] == {"ok": False, "detail": f"no {SECRET}"}
     assert {"failing_tasks", "link_holder", "failed_subscriptions", "history_lost_in_handovers"} <= set(body)
+    # Redis is checked in both wirings; embedded, it is the process's private server.
+    assert body["checks"]["redis"] == ({"ok": True, "detail": "embedded: this process's private server"}
+                                       if settings.EMBEDDED else {"ok": True})
 
 
 def test_it_gives_an_admins_token_the_details_and_a_wrong_token_what_anyone_gets(admin_user, settings):

@@ -1,4 +1,5 @@
-"""Settings come from the environment; the embedded default and the Redis wiring differ only there."""
+"""Settings come from the environment; the embedded default and the Redis wiring differ only there:
+the same channel layer either way, on the process's private server or on ``REDIS_URL``."""
 
 import runpy
 from pathlib import Path
@@ -21,7 +22,11 @@ def load(monkeypatch, **env):
 def test_it_defaults_to_the_embedded_setup(monkeypatch, tmp_path):
     s = load(monkeypatch, VAR_DIR=str(tmp_path))
     assert s["EMBEDDED"] is True
-    assert s["CHANNEL_LAYERS"]["default"]["BACKEND"] == "channels.layers.InMemoryChannelLayer"
+    layer = s["CHANNEL_LAYERS"]["default"]
+    assert layer["BACKEND"] == "robot.live.channel_layer.RedisChannelLayer"
+    assert [h["address"] for h in layer["CONFIG"]["hosts"]] == [s["REDIS_URL"]]
+    assert s["REDIS_URL"].startswith("unix://") and s["REDIS_URL"].endswith("/valkey.sock")
+    assert load(monkeypatch, VAR_DIR=str(tmp_path))["REDIS_URL"] != s["REDIS_URL"], "a private server each"
     assert s["DATABASES"]["default"]["ENGINE"] == "django.db.backends.sqlite3"
     assert str(s["DATABASES"]["default"]["NAME"]).startswith(str(tmp_path))
     assert s["ROSBRIDGE_URL"] == "ws://127.0.0.1:9090"
@@ -39,7 +44,7 @@ def test_it_wires_redis_and_postgres_from_urls(monkeypatch, tmp_path):
     )
     assert s["EMBEDDED"] is False
     layer = s["CHANNEL_LAYERS"]["default"]
-    assert layer["BACKEND"] == "channels_redis.core.RedisChannelLayer"
+    assert layer["BACKEND"] == "robot.live.channel_layer.RedisChannelLayer"
     assert [h["address"] for h in layer["CONFIG"]["hosts"]] == ["redis://127.0.0.1:6379/3"]
     # Longer than the layer's blocking receive (5 s), or a quiet channel's receive() raises.
     assert layer["CONFIG"]["hosts"][0]["socket_timeout"] > 5
