@@ -10,6 +10,8 @@ and embedded (one Daphne process, its private Valkey server). Prints ``name: val
 from __future__ import annotations
 
 import asyncio
+import collections
+import contextlib
 import glob
 import json
 import sys
@@ -40,8 +42,8 @@ class Monitor(threading.Thread):
         self.url, self.commands, self.recording = url, [], False
 
     def run(self) -> None:
-        with redis.Redis.from_url(self.url).monitor() as monitor:
-            for command in monitor.listen():
+        with contextlib.suppress(redis.ConnectionError), redis.Redis.from_url(self.url).monitor() as monitor:
+            for command in monitor.listen():  # until the server stops with its stack
                 if self.recording:
                     self.commands.append(command["command"])
 
@@ -77,6 +79,9 @@ def measure(stack: Stack, url: str) -> tuple[float, float]:
     monitor.recording = False
     moved = max(1, twists(stack) - sent)
     drive_only = [c for c in monitor.commands if not any(part in c for part in LIVE) and "INFO" not in c]
+    # What the drive's commands are (on stderr): the command and its key's last part.
+    kinds = collections.Counter(" ".join(c.split()[:2]).rsplit(":", 1)[-1][:40] for c in drive_only)
+    print({kind: round(n / moved, 2) for kind, n in kinds.most_common(8)}, file=sys.stderr)
     return len(monitor.commands) / moved, len(drive_only) / moved
 
 
