@@ -48,6 +48,12 @@ class Monitor(threading.Thread):
                     self.commands.append(command["command"])
 
 
+def kind(command: str) -> str:
+    """``EVALSHA`` or ``RPUSH link-requests``: the command and the last part of its first argument."""
+    name, _, rest = command.partition(" ")
+    return f"{name} {rest.split(' ', 1)[0].rsplit(':', 1)[-1][:30]}"
+
+
 def twists(stack: Stack) -> int:
     import urllib.request
 
@@ -80,7 +86,7 @@ def measure(stack: Stack, url: str) -> tuple[float, float]:
     moved = max(1, twists(stack) - sent)
     drive_only = [c for c in monitor.commands if not any(part in c for part in LIVE) and "INFO" not in c]
     # What the drive's commands are (on stderr): the command and its key's last part.
-    kinds = collections.Counter(" ".join(c.split()[:2]).rsplit(":", 1)[-1][:40] for c in drive_only)
+    kinds = collections.Counter(kind(c) for c in drive_only)
     print({kind: round(n / moved, 2) for kind, n in kinds.most_common(8)}, file=sys.stderr)
     return len(monitor.commands) / moved, len(drive_only) / moved
 
