@@ -1,7 +1,7 @@
 """Redis commands per teleop Twist: a driver holds a key on ``/ws/teleop/`` against the simulator
-while MONITOR records every command the Redis server gets. Counted per Twist the robot received:
-all of them (the moving robot's topics stored and published too), and those of the drive itself
-(everything but the latest-state store, the live feed and the link's status).
+while MONITOR records every command the Redis server gets from a client (a script, EVALSHA, once).
+Counted per Twist the robot received: all of them (the moving robot's topics stored and published
+too), and those of the drive itself (everything but the latest-state store and the live feed).
 
 Two wirings: scaled (Daphne and ``robotlink`` as separate processes sharing a private redis-server)
 and embedded (one Daphne process, its private Valkey server). Prints ``name: value`` lines.
@@ -44,7 +44,8 @@ class Monitor(threading.Thread):
     def run(self) -> None:
         with contextlib.suppress(redis.ConnectionError), redis.Redis.from_url(self.url).monitor() as monitor:
             for command in monitor.listen():  # until the server stops with its stack
-                if self.recording:
+                # A script's own commands are shown too: the script is the one round trip.
+                if self.recording and command.get("client_type") != "lua":
                     self.commands.append(command["command"])
 
 
