@@ -125,13 +125,13 @@ TEMPLATES = [
     },
 ]
 
-DATABASES = {
-    "default": dj_database_url.parse(
-        env_str("DATABASE_URL", f"sqlite:///{VAR_DIR / 'db.sqlite3'}"),
-        conn_max_age=env_int("DATABASE_CONN_MAX_AGE", 0, minimum=0),
-    )
-}
-if DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
+DATABASES = {"default": dj_database_url.parse(env_str("DATABASE_URL", f"sqlite:///{VAR_DIR / 'db.sqlite3'}"))}
+if DATABASES["default"]["ENGINE"] == "django.db.backends.postgresql":
+    # Django's connections belong to a thread and each request gets a new one: a new connection per
+    # request without a pool (CONN_MAX_AGE must stay 0 with it). Borrowing waits at most ``timeout``.
+    DATABASES["default"].setdefault("OPTIONS", {})["pool"] = {
+        "min_size": 1, "max_size": env_int("DATABASE_POOL_MAX_SIZE", 10, minimum=1), "timeout": 10}
+elif DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
     # WAL lets the recorder write while pages read; a busy timeout instead of "database is locked".
     # Transactions take the write lock when they begin: a deferred one that read first cannot
     # wait for it (SQLite refuses the upgrade at once if another connection wrote meanwhile).

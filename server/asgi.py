@@ -12,8 +12,6 @@ from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from cyborg_site.client_address import ClientAddress  # noqa: E402
 from cyborg_site.drain import CountRequests, install_in_daphne  # noqa: E402
 from dashboard.routing import FRONTDOOR_SOCKET_PATH, websocket_urlpatterns  # noqa: E402
-from robot.api.fast_commands import FastCommandApp  # noqa: E402
-from robot.api.fast_state import FastStateApp  # noqa: E402
 from robot.link.hosting import autostart_in_daphne  # noqa: E402
 from robot.teleop.session import halt_all  # noqa: E402
 from server import patches as server_patches  # noqa: E402
@@ -23,8 +21,7 @@ from server.ws_origin import OriginCheck  # noqa: E402
 
 application = ProtocolTypeRouter(
     {
-        "http": ClientAddress(CountRequests(ReadThrottle(FastCommandApp(FastStateApp(django_asgi_app),
-                                                                        django_asgi_app)))),
+        "http": ClientAddress(CountRequests(ReadThrottle(django_asgi_app))),
         "websocket": ClientAddress(OriginCheck(AuthMiddlewareStack(URLRouter(websocket_urlpatterns)),
                                                ticket_paths=(FRONTDOOR_SOCKET_PATH,))),
     }

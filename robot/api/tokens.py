@@ -3,15 +3,13 @@ per-process cache, so scripts polling the API cost almost no query."""
 
 from __future__ import annotations
 
-import asyncio
 import time
 from datetime import datetime, timedelta
 from typing import Any
 
-from asgiref.sync import sync_to_async
 from django.conf import settings
 from django.contrib.auth import get_user_model
-from django.db import DatabaseError, connection, transaction
+from django.db import transaction
 from django.db.models.signals import post_delete, post_save
 from django.dispatch import receiver
 from django.utils import timezone
@@ -19,16 +17,13 @@ from rest_framework.authentication import TokenAuthentication
 from rest_framework.authtoken.models import Token
 from rest_framework.exceptions import AuthenticationFailed, ValidationError
 
-from cyborg_site.roles import role_of
 from robot.models import TokenExpiry
-from robot.supervisor import spawn
 
 # A valid token is trusted this long without asking the database again (per process): a deleted
 # token, an expired one or a deactivated or demoted user stops working within this time in every
 # web process (at once in the process that made the change), at one query per token per period.
 TOKEN_CACHE_S = 0.5
 _TOKEN_CACHE_MAX = 10_000
-_renewing: dict[str, asyncio.Future[Any]] = {}
 
 
 def expires_at(token: Token) -> datetime | None:
@@ -88,39 +83,6 @@ class CachedTokenAuthentication(TokenAuthentication):
             self._cache.clear()
         self._cache[key] = (now + TOKEN_CACHE_S, user, token)
         return user, token
-
-    @classmethod
-    def cached_user(cls, key: str) -> Any:
-        """The active user of a token trusted without asking the database, else None."""
-        hit = cls._cache.get(key)
-        return hit[1] if hit is not None and hit[0] > time.monotonic() else None
-
-    @classmethod
-    async def arenew(cls, key: str) -> Any:
-        """A known token whose trust has run out asked of the database again, once however many
-        requests wait for it (they would otherwise all take Django's way at the same moment); its
-        active user, or None when it is no longer good (or unknown: Django's way answers that)."""
-        if key not in cls._cache:
-            return None
-        renewing = _renewing.get(key)
-        if renewing is None or renewing.get_loop() is not asyncio.get_running_loop():
-            renewing = _renewing[key] = spawn(sync_to_async(cls._renew, thread_sensitive=False)(key), awaited=True)
-            renewing.add_done_callback(lambda _: _renewing.pop(key, None))
-        return await asyncio.shield(renewing)
-
-    @classmethod
-    def _renew(cls, key: str) -> Any:
-        try:
-            user = cls().authenticate_credentials(key)[0]
-            role_of(user)  # its roles read here too, so the fast command path can judge without a query
-            return user
-        except AuthenticationFailed:
-            cls._cache.pop(key, None)
-            return None
-        except DatabaseError:
-            return None  # Django's way answers, as it would have
-        finally:
-            connection.close()  # this pool thread's own: none is left open between renewals
 
 
 @receiver(post_delete, sender=Token)

@@ -1,5 +1,4 @@
-"""A command through the API crosses from the event loop to a thread once, for its view; for a
-trusted caller (cached token and roles) it crosses only to have its audit row written."""
+"""A command through the API crosses from the event loop to a thread once, for its view."""
 
 import json
 
@@ -49,29 +48,3 @@ async def test_a_speech_command_crosses_to_a_thread_once_for_its_view(robot, ope
     assert len(hops["to_thread"]) <= 3  # the third: closing the response once it is sent
     assert len(hops["to_loop"]) == 1  # the view hands the robot work to the event loop once
 
-
-async def test_a_trusted_callers_speech_command_crosses_only_for_its_audit_row(robot, operator, hops):
-    from asgiref.sync import sync_to_async
-
-    from robot.commands.audit_writer import writer
-    from server.asgi import application
-
-    key = (await sync_to_async(Token.objects.create)(user=operator)).key
-    body = json.dumps({"text": "hops"}).encode()
-    headers = [(b"host", b"127.0.0.1"), (b"authorization", f"Token {key}".encode()),
-               (b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
-
-    async def speak() -> dict:
-        return await HttpCommunicator(application, "POST", "/api/robot/speech/", body=body,
-                                      headers=headers).get_response(timeout=15)
-
-    assert (await speak())["status"] == 200  # through Django: the token is checked, it and the roles cached
-    hops["to_thread"].clear()
-    hops["to_loop"].clear()
-    writes = writer.writes
-    response = await speak()
-    assert response["status"] == 200, response["body"]
-    # Answered on the loop: no request thread, no hop back for the publish; the audit row is
-    # written by the audit writer's long-lived thread (one hand-over, on its kept connection).
-    assert hops == {"to_thread": [], "to_loop": []}
-    assert writer.writes - writes == 1

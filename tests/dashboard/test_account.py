@@ -21,7 +21,7 @@ from robot.alerts.choices import alert_choice_set
 from robot.alerts.delivery import recipients
 from robot.alerts.models import AlertChoice
 from robot.api.tokens import TOKEN_CACHE_S, expires_at, token_create, token_revoke
-from tests.api.fastpaths import empty_token_cache  # noqa: F401
+from tests.api.token_cache import empty_token_cache  # noqa: F401
 from tests.conftest import PASSWORD
 
 pytestmark = [pytest.mark.django_db, pytest.mark.usefixtures("empty_token_cache")]
