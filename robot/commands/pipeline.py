@@ -12,10 +12,9 @@ to the robot, because every crossing queues behind whatever else that thread or 
   and the audit entry run in the caller's thread, where Django's ORM is at home; ``send``
   crosses to the event loop once. API views are synchronous for this reason
   (``robot.api.base``).
-- ``arun``, the asynchronous face (websockets, tasks, the API's fast path for commands):
-  ``send`` runs where it is. The role check reads groups the user object caches
-  (``cyborg_site.roles``); a websocket consumer reads them when it connects, and a cached API
-  token's user has them from its first request. With those, and a ``check`` that reads no
+- ``arun``, the asynchronous face (websockets, tasks): ``send`` runs where it is. The role
+  check reads groups the user object caches (``cyborg_site.roles``); a websocket consumer reads
+  them when it connects. With those, and a ``check`` that reads no
   database (``check_on_loop``), everything before sending runs on the loop and the only hop is
   the audit write, on the audit writer's long-lived thread (``robot.commands.audit_writer``).
   Otherwise the role check and ``check`` run together in one thread hop before sending.
