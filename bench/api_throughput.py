@@ -121,9 +121,9 @@ def profile(pid: int, name: str) -> subprocess.Popen | None:
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
-def state_api(stack: Stack, token: str, name: str = "state_api", query: str = "") -> None:
-    url = f"{stack.url}/api/robot/state/{query}"
-    call_get(url, token)  # the first request checks the token against the database and caches it
+def state_api(stack: Stack, token: str, name: str = "state_api") -> None:
+    url = f"{stack.url}/api/robot/state/"
+    call_get(url, token)  # outside the window: the first request checks the token against the database
     spy = profile(stack.web.pid, name)
     cpu0, t0 = cpu_seconds(stack.web.pid), time.monotonic()
     if shutil.which("wrk"):
@@ -159,16 +159,16 @@ def received(stack: Stack, topic: str, last: int) -> dict:
         return json.loads(res.read())
 
 
-def speech_commands(stack: Stack, token: str, query: str = "") -> tuple[list[float], list[float]]:
+def speech_commands(stack: Stack, token: str) -> tuple[list[float], list[float]]:
     topic = ri.topic("text_to_speech").name
     before = received(stack, topic, 0)["count"]
     sent: dict[str, float] = {}
     round_trips = []
     for i in range(SPEECH_N):
-        text = f"bench {query} {i}"
+        text = f"bench {i}"
         sent[text] = time.time()
         t0 = time.perf_counter()
-        call(f"{stack.url}/api/robot/speech/{query}", {"text": text}, token)
+        call(f"{stack.url}/api/robot/speech/", {"text": text}, token)
         round_trips.append((time.perf_counter() - t0) * 1000)
     deadline = time.monotonic() + 10
     while received(stack, topic, 0)["count"] < before + SPEECH_N and time.monotonic() < deadline:
@@ -183,9 +183,6 @@ def speech_commands(stack: Stack, token: str, query: str = "") -> tuple[list[flo
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", choices=("state", "command"), help="run one part of the bench")
-    parser.add_argument("--compare", action="store_true",
-                        help="also send the reads and the commands through Django (a query string keeps them off "
-                             "the shortcuts), printed as state_django_* and command_django_*")
     args = parser.parse_args()
     only = args.only
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
@@ -195,22 +192,18 @@ def main() -> None:
         if only != "command":
             log.info("state API: %d connections for %.0f s", CONNECTIONS, DURATION_S)
             state_api(stack, token)
-            if args.compare:
-                state_api(stack, token, "state_django", "?via=django")
         if only == "state":
             return
-        routes = [("command", "")] + ([("command_django", "?via=django")] if args.compare else [])
-        for name, query in routes:
-            log.info("%d sequential speech commands%s", SPEECH_N, " through Django" if query else "")
-            cpu0 = cpu_seconds(stack.web.pid)
-            to_robot, round_trips = speech_commands(stack, token, query)
-            cpu_ms = (cpu_seconds(stack.web.pid) - cpu0) * 1000 / SPEECH_N
-            print(f"{name}_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
-            print(f"{name}_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
-            print(f"{name}_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
-            print(f"{name}_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
-            print(f"{name}_server_cpu_ms: {cpu_ms:.2f}")
-            print(f"{name}_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
+        log.info("%d sequential speech commands", SPEECH_N)
+        cpu0 = cpu_seconds(stack.web.pid)
+        to_robot, round_trips = speech_commands(stack, token)
+        cpu_ms = (cpu_seconds(stack.web.pid) - cpu0) * 1000 / SPEECH_N
+        print(f"command_to_robot_p50_ms: {quantile(to_robot, 0.5):.2f}")
+        print(f"command_to_robot_p99_ms: {quantile(to_robot, 0.99):.2f}")
+        print(f"command_round_trip_p50_ms: {quantile(round_trips, 0.5):.2f}")
+        print(f"command_round_trip_p99_ms: {quantile(round_trips, 0.99):.2f}")
+        print(f"command_server_cpu_ms: {cpu_ms:.2f}")
+        print(f"command_loadavg: {os.getloadavg()[0]:.1f}", flush=True)
 
 
 if __name__ == "__main__":
