@@ -68,7 +68,13 @@ class AuditWriter:
         return await asyncio.shield(asyncio.wrap_future(future))
 
     def record_here(self, **fields: Any) -> AuditEntry | None:
-        """``audit_record(**fields)`` in the caller's thread (the synchronous face), journaled likewise."""
+        """``audit_record(**fields)`` in the caller's thread (the synchronous face), journaled likewise;
+        at once while the writer is ``down`` (its thread writes the journal when the database is back),
+        so a refusal does not first wait out a connection attempt (the pool's ``timeout``)."""
+        if self.down:
+            self._keep(fields)
+            self._ensure_thread()
+            return None
         try:
             return audit_record(**fields)
         except (OperationalError, InterfaceError):
