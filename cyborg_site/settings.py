@@ -134,7 +134,7 @@ if DATABASES["default"]["ENGINE"] == "django.db.backends.postgresql":
     # psycopg's default the retries back off for up to 5 minutes, and a database that came back would
     # wait for the next one (the audit journal with it).
     DATABASES["default"].setdefault("OPTIONS", {})["pool"] = {
-        "min_size": 1, "max_size": env_int("DATABASE_POOL_MAX_SIZE", 10, minimum=1), "timeout": 2,
+        "min_size": 1, "max_size": env_int("DATABASE_POOL_MAX_SIZE", 20, minimum=1), "timeout": 2,
         "reconnect_timeout": 2}
 elif DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
     # WAL lets the recorder write while pages read; a busy timeout instead of "database is locked".
