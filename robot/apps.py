@@ -19,7 +19,10 @@ class RobotConfig(AppConfig):
         # the state machine graph and the diagnostics.
         from robot.audio import link as audio
         from robot.audio.talk import end_all_talk
+        from robot.commands.pipeline import Gate, install_gate
         from robot.estop import stop as estop
+        from robot.estop.latch import ensure_released
+        from robot.estop.rule import declaration
         from robot.introspection import tracking
         from robot.link import watching
         from robot.link.hosting import register_background
@@ -36,6 +39,7 @@ class RobotConfig(AppConfig):
         estop.register_step("talk", end_all_talk)
         estop.register_step("cancel_navigation", cancel_every_goal)
         estop.on_release(announce_release)
+        install_gate(Gate(declaration, ensure_released))
         checks.register(check_estop_steps)
         audio.install()  # microphone relay and speaker format wherever the link runs
         overlays.install()

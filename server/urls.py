@@ -18,6 +18,7 @@ urlpatterns = [
     path("accounts/sso/login/", login.sso_login, name="sso-login"),
     path("accounts/sso/callback/", login.sso_callback, name="sso-callback"),
     path("api/", include("robot.estop.urls")),
+    path("api/", include("robot.frontdoor.urls")),
     path("api/", include("robot.api.urls")),
     path("api/history/", include(history_api)),
     path("api/", include(dashboard_api)),

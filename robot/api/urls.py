@@ -4,7 +4,7 @@ from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerSplitVie
 from rest_framework.permissions import IsAuthenticated
 from rest_framework.routers import SimpleRouter
 
-from robot.api import alerts, commands, frontdoor, navigation, topics
+from robot.api import alerts, commands, navigation, topics
 from robot.api.audit import AuditListView
 from robot.api.auth import TokenView
 from robot.api.base import API_AUTHENTICATION
@@ -29,7 +29,6 @@ urlpatterns = [
     path("navigation/status/", navigation.status_view, name="api-navigation-status"),
     path("navigation/initial-pose/", navigation.initial_pose_view, name="api-navigation-initial-pose"),
     path("topics/", topics.topics_view, name="api-topics"),
-    path("frontdoor/ticket/", frontdoor.ticket_view, name="api-frontdoor-ticket"),
     path("topics/rate/", topics.rate_view, name="api-topics-rate"),
     *router.urls,
     path("schema/", SpectacularAPIView.as_view(authentication_classes=API_AUTHENTICATION,

@@ -29,10 +29,9 @@ from django.conf import settings
 
 from robot import interface as ri
 from robot.commands import moderoute
-from robot.commands.pipeline import Busy, Command, arun
+from robot.commands.pipeline import Busy, Command, arun, gate
 from robot.commands.statewatch import Change, StateWatch
 from robot.commands.validation import clean_mode
-from robot.estop.latch import ensure_released
 from robot.link import bus
 from robot.live import locks
 from robot.live.announce import apublish_state
@@ -138,9 +137,9 @@ async def _pause(seconds: float) -> None:
     walk to suspension waits for a change under way to end, and must not wait out its pause."""
     deadline = asyncio.get_running_loop().time() + seconds
     while (left := deadline - asyncio.get_running_loop().time()) > 0:
-        await ensure_released()
+        await gate().ensure_released()
         await asyncio.sleep(min(LATCH_POLL_S, left))
-    await ensure_released()
+    await gate().ensure_released()
 
 
 async def _change(mode: ri.Mode) -> str:

@@ -32,8 +32,6 @@ from asgiref.sync import async_to_sync, sync_to_async
 from cyborg_site.client_address import client_address
 from cyborg_site.roles import is_operator, roles_cached
 from robot.commands.audit_writer import writer
-from robot.estop.latch import ensure_released
-from robot.estop.rule import Declaration, declaration
 from robot.link.bus import RobotError, stopping
 
 
@@ -78,6 +76,32 @@ class Busy(RobotError):
     code = "busy"
 
 
+Declaration = Callable[[Any], bool]  # given the checked input: does this run move the robot?
+
+
+@dataclass(frozen=True)
+class Gate:
+    """The E-STOP's say on every command: which inputs of an action move the robot (an undeclared
+    action cannot be built), and the check that raises ``EstopEngaged`` while the stop is latched."""
+
+    declaration: Callable[[str], Declaration]
+    ensure_released: Callable[[], Awaitable[None]]
+
+
+_gate: list[Gate] = []
+
+
+def install_gate(gate: Gate) -> None:
+    """Installed by the E-STOP at start-up (``robot.apps``); until then no command can be built."""
+    _gate[:] = [gate]
+
+
+def gate() -> Gate:
+    if not _gate:
+        raise LookupError("the E-STOP's gate is not installed (robot.apps installs it): no command runs without it")
+    return _gate[0]
+
+
 def _unchecked() -> None:
     return None
 
@@ -105,7 +129,7 @@ class Command:
     moves: Declaration = field(init=False)
 
     def __post_init__(self) -> None:
-        self.moves = declaration(self.action)
+        self.moves = gate().declaration(self.action)
 
 
 async def _send(command: Command, checked: Any) -> str:
@@ -117,7 +141,7 @@ async def _send(command: Command, checked: Any) -> str:
         raise AuditUnavailable("The audit log cannot be written (the database is not reachable): commands are "
                                "refused until it can. The E-STOP still works.")
     if command.moves(checked):
-        await ensure_released()
+        await gate().ensure_released()
         return await command.send(checked) or "ok"
     with stopping():
         return await command.send(checked) or "ok"

@@ -11,10 +11,10 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from robot.estop.state import Latch
 from robot.link.bus import EstopEngaged
 from robot.live.announce import apublish_state
 from robot.live.groups import LATCH_KEY
+from robot.live.latchstate import Latch
 from robot.live.state import get_store
 
 

@@ -11,12 +11,10 @@ commands stop the robot with one input and move it with another.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from robot import interface as ri
-
-Declaration = Callable[[Any], bool]  # given the checked input: does this run move the robot?
+from robot.commands.pipeline import Declaration
 
 
 def always(_: Any) -> bool:

@@ -12,10 +12,10 @@ from urllib.parse import urlsplit
 
 from django.conf import settings
 
-from robot.estop.state import Latch
 from robot.link.core import LinkCore
 from robot.live.announce import aannounce, aannounce_status, server_update
 from robot.live.groups import LATCH_KEY, LinkStatus
+from robot.live.latchstate import Latch
 from robot.live.state import LINK_HEARTBEAT_S
 from robot.supervisor import failing, running
 

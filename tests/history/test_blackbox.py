@@ -20,9 +20,9 @@ from history.policies import policy_upsert
 from history.retention import prune_expired
 from history.storage import utc, write_rows
 from robot import interface as ri
-from robot.estop.state import Latch
 from robot.live.announce import aannounce, server_update
 from robot.live.keys import LATCH_KEY
+from robot.live.latchstate import Latch
 from robot.supervisor import running
 from tests.helpers import async_wait_until
 
