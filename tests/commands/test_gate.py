@@ -96,3 +96,11 @@ async def test_under_the_latch_what_moves_is_refused_and_audited_and_the_rest_is
     refused = [e async for e in AuditEntry.objects.filter(ok=False).order_by("id")]
     assert [(e.action, e.error_code) for e in refused] == [("mode", "estop"), ("motors", "estop"), ("event", "estop")]
     assert await arun(command("event", "demo_start"), user=operator, source="api") == "sent"
+
+
+def test_without_the_estops_gate_no_command_can_be_built(monkeypatch):
+    from robot.commands import pipeline
+
+    monkeypatch.setattr(pipeline, "_gate", [])
+    with pytest.raises(LookupError, match="gate is not installed"):
+        Command("speech", {}, send=lambda _: None)  # type: ignore[arg-type, return-value]
