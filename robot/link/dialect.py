@@ -25,6 +25,14 @@ GOAL_STATUS_FROM_ROS2 = {0: 0, 1: 0, 2: 1, 3: 6, 4: 3, 5: 2, 6: 4}
 LOG_LEVEL_FROM_ROS2 = {10: 1, 20: 2, 30: 4, 40: 8, 50: 16}
 
 
+def offers_version_service(ok: bool, values: Any) -> bool | None:
+    """Whether rosapi's service list names /rosapi/get_ros_version (None: no list). Asked first, because
+    calling a service that does not exist makes a ROS 1 rosbridge log an error on the robot's log."""
+    if not ok or not isinstance(values, dict) or not isinstance(values.get("services"), list):
+        return None
+    return ROS_VERSION_SERVICE[0] in values["services"]
+
+
 def version_from_answer(ok: bool, values: Any) -> int | None:
     """The robot's ROS from /rosapi/get_ros_version's answer; None if the answer says nothing
     (rosapi away, the call timed out)."""

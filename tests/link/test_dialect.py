@@ -52,6 +52,14 @@ async def test_the_link_finds_out_the_ros_and_shows_it_in_status_and_health(link
     assert report["ros"] == ros
 
 
+async def test_finding_out_the_ros_leaves_no_error_on_a_ros1_robots_log(sim, settings):
+    settings.ROBOT_ROS = "auto"
+    async for hosted in hosted_link(sim.url, settings):
+        await asyncio.sleep(1.0)  # the probe is asked at once on connect; its log line would follow it
+        assert hosted.ros_version == ri.ROS1
+        assert not [m for m in await _stored_logs() if "get_ros_version" in str(m.get("msg"))]
+
+
 async def test_log_lines_and_stamps_reach_the_product_in_one_model(link_either, sim_either, ros):
     from robot.live.announce import aget_state
 
