@@ -125,18 +125,15 @@ TEMPLATES = [
     },
 ]
 
-DATABASES = {"default": dj_database_url.parse(env_str("DATABASE_URL", f"sqlite:///{VAR_DIR / 'db.sqlite3'}"))}
-if DATABASES["default"]["ENGINE"] == "django.db.backends.postgresql":
-    # Django's connections belong to a thread and each request gets a new one: a new connection per
-    # request without a pool (CONN_MAX_AGE must stay 0 with it). While the database is down a request
-    # waits ``timeout`` for a connection before its 503 (without the pool: refused at once), and the
-    # pool's retries give up after ``reconnect_timeout`` so the next request tries at once: left to
-    # psycopg's default the retries back off for up to 5 minutes, and a database that came back would
-    # wait for the next one (the audit journal with it).
-    DATABASES["default"].setdefault("OPTIONS", {})["pool"] = {
-        "min_size": 1, "max_size": env_int("DATABASE_POOL_MAX_SIZE", 20, minimum=1), "timeout": 2,
-        "reconnect_timeout": 2}
-elif DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
+DATABASES = {
+    "default": dj_database_url.parse(
+        env_str("DATABASE_URL", f"sqlite:///{VAR_DIR / 'db.sqlite3'}"),
+        conn_max_age=env_int("DATABASE_CONN_MAX_AGE", 0, minimum=0),
+    )
+}
+# (Not Django's psycopg pool: a connection belongs to a thread, and the pool counts one a short-lived
+# worker thread never closed as taken for good; the suite's services pass ran it dry within minutes.)
+if DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
     # WAL lets the recorder write while pages read; a busy timeout instead of "database is locked".
     # Transactions take the write lock when they begin: a deferred one that read first cannot
     # wait for it (SQLite refuses the upgrade at once if another connection wrote meanwhile).
