@@ -38,8 +38,9 @@ def replay_stack():
     env = {"INCIDENT_BEFORE_S": str(BEFORE_S), "INCIDENT_AFTER_S": str(AFTER_S), "CAMERA_RECORD_FPS": "2"}
     with Stack(env=env) as running:
         running.wait_robot_online()
-        running.started_at = time.time()  # type: ignore[attr-defined]
         running.manage("shell", "-c", "from history.defaults import ensure_default_policies; ensure_default_policies()")
+        # Recorded from when the recorder has read the policies (it reloads them every second or so).
+        running.started_at = time.time() + 2.0  # type: ignore[attr-defined]
         yield running
 
 
