@@ -18,6 +18,7 @@ from robot.api.serializers_navigation import (
     InitialPoseResult,
     LocationSerializer,
     MapMeta,
+    NavigationCancel,
     NavigationStatus,
     PoseInput,
 )
@@ -50,7 +51,7 @@ def goal_view(request: Request) -> Response:
     return Response(command.result)
 
 
-@extend_schema(request=None, responses={200: NavigationStatus, **error_responses(503, 504)},
+@extend_schema(request=None, responses={200: NavigationCancel, **error_responses(503, 504)},
                summary="Cancel the current goal")
 @robot_api_view(["POST"], commands=True)
 def cancel_view(request: Request) -> Response:

@@ -43,6 +43,11 @@ InitialPoseResult = shape("InitialPoseResult", detail=serializers.CharField(), p
 NavigationStatus = shape(
     "NavigationStatus", goal=Goal(allow_null=True), robot_pose=Pose(allow_null=True),
     **same(serializers.CharField, "current_location", "map_version", allow_null=True), backend=serializers.CharField())
+NavigationCancel = shape(
+    "NavigationCancel", goal=Goal(allow_null=True), robot_pose=Pose(allow_null=True),
+    **same(serializers.CharField, "current_location", "map_version", allow_null=True), backend=serializers.CharField(),
+    detail=serializers.CharField(), cancel_sent=serializers.BooleanField(
+        help_text="A goal was under way and the cancel went out for it (it may show as ended already)."))
 
 
 class LocationSerializer(serializers.ModelSerializer):

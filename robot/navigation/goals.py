@@ -119,7 +119,8 @@ async def agoal_send(*, user: Any, source: str, data: dict[str, Any]) -> dict[st
 
 def goal_cancel() -> Command:
     """Cancel the current goal; with none under way, cancel every move_base goal (stop navigating).
-    ``result`` is the navigation status afterwards."""
+    ``result`` is the navigation status afterwards, and ``cancel_sent``: a goal was under way and this
+    cancel went out for it (the robot may have ended it already by the time the status is read)."""
 
     async def send(_: None) -> str:
         goal = (await anavigation_status())["goal"]
@@ -132,7 +133,7 @@ def goal_cancel() -> Command:
         else:
             await apublish_action("move_base", "cancel", cancel_message())
             outcome = "no goal of ours under way: cancelled every move_base goal"
-        command.result.update(await anavigation_status())
+        command.result.update(await anavigation_status(), cancel_sent=outcome.startswith("cancel requested"))
         return outcome
 
     command = Command("navigation.cancel", {}, send)

@@ -200,7 +200,8 @@ function cancelText(result) {
   const goal = result.goal;
   if (!goal) return "Navigation stopped: no goal of ours was under way.";
   const where = goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`;
-  return goal.finished ? `The goal to ${where} had already ended (${goal.status}).` : `Cancelling the goal to ${where}.`;
+  return goal.finished && !result.cancel_sent ? `The goal to ${where} had already ended (${goal.status}).`
+    : `Cancelling the goal to ${where}.`;
 }
 
 // --- commands --------------------------------------------------------------------------

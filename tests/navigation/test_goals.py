@@ -45,8 +45,9 @@ def test_it_stops_the_robot_on_cancel(nav_link, sim, operator_api):
                    what="the distance left in the goal's status")
     res = operator_api.post("/api/navigation/cancel/", format="json")
     assert res.status_code == 200, res.json()
-    assert res.json()["goal"]["status"] in ("cancelling", "cancelled")
+    assert res.json()["goal"]["status"] in ("cancelling", "cancelled") and res.json()["cancel_sent"] is True
     wait_goal_state(operator_api, "cancelled")
+    assert operator_api.post("/api/navigation/cancel/", format="json").json()["cancel_sent"] is False
     state = wait_until(lambda: (s := sim.snapshot()["state"]) and not s["navigating"] and s, what="navigation to stop")
     assert state["goal"] is None
     wait_until(lambda: abs(sim.snapshot()["state"]["v"]) < 0.01, what="the robot to stand still")
