@@ -41,6 +41,7 @@ from live_fanout import (  # noqa: E402
     Listener,
     Reference,
     cpu_seconds,
+    merge_results,
     summarise,
 )
 from picows import WSMsgType, ws_connect  # noqa: E402
@@ -122,16 +123,7 @@ def drive(urls: list[str], server_pids: list[int]) -> dict:
     time.sleep(MEASURE_S)
     merged: dict = {"failed": 0, "samples": [], "cpu_pct": (cpu_seconds(server_pids) - cpu0) / (time.monotonic() - t0)
                     * 100, "load": os.getloadavg()[0]}
-    for proc in procs:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            if line.startswith("RESULT "):
-                result = json.loads(line[7:])
-                merged["failed"] += result["failed"]
-                merged["samples"] += result["samples"]
-                merged["window"] = result["window"]
-        proc.wait(30)
-    return merged
+    return merge_results(procs, merged)
 
 
 def tickets(base: str, token: str, n: int) -> list[str]:

@@ -263,6 +263,11 @@ def drive(urls: list[str], cookie: str, mode: str, n: int, server_pids: list[int
     client_cpu = (cpu_seconds(client_pids) - client0) / elapsed * 100
     merged: dict = {"failed": 0, "samples": [], "cpu_pct": cpu, "client_cpu_pct": client_cpu,
                     "load": os.getloadavg()[0]}
+    return merge_results(procs, merged)
+
+
+def merge_results(procs: list[subprocess.Popen], merged: dict) -> dict:
+    """The listener processes' RESULT lines added into ``merged`` (failures, samples, their window)."""
     for proc in procs:
         assert proc.stdout is not None
         for line in proc.stdout:
