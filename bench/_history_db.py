@@ -62,8 +62,8 @@ def setup_child() -> None:
     django.setup()
     from django.db import connection
 
-    from history.models import RecordingSettings, Rollup, Sample, SeriesBucket, TopicPolicy
+    from history.models import RecordingSettings, Rollup, Sample, TopicPolicy
 
     with connection.schema_editor() as editor:
-        for model in (RecordingSettings, TopicPolicy, Sample, SeriesBucket, Rollup):
+        for model in (RecordingSettings, TopicPolicy, Sample, Rollup):
             editor.create_model(model)

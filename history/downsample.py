@@ -6,23 +6,21 @@ zoomed out.
 
 Buckets of a second or wider are summed from the rollups written with the rows (one row per
 field and minute, or second), so no JSON is read. Narrower buckets, and fields the rollups
-leave out, come from the stored JSON; there a bucket that can no longer change is cached in
-``SeriesBucket`` and later requests only scan the open tail.
+leave out, come from the stored JSON, read in one scan of the range.
 """
 
 from __future__ import annotations
 
 import math
 import re
-import time
 from dataclasses import dataclass
 from datetime import datetime
 
 from django.db import connection
 
-from history.models import Rollup, Sample, SeriesBucket
+from history.models import Rollup, Sample
 from history.rollup import level_for
-from history.storage import SETTLE_S, utc
+from history.storage import utc
 
 _MS = 1, 2, 5, 10, 20, 50, 100, 200, 500
 _S = 1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 10800, 21600, 43200, 86400, 172800, 604800
@@ -100,18 +98,6 @@ def _buckets(sql: str, params: list) -> dict[int, Agg]:
         return {int(b): (t, vmin, vmax, vsum, int(n)) for b, t, vmin, vmax, vsum, n in cursor.fetchall()}
 
 
-def _runs(indexes: list[int], *, max_runs: int = 8) -> list[tuple[int, int]]:
-    runs: list[tuple[int, int]] = []
-    for i in indexes:
-        if runs and runs[-1][1] == i - 1:
-            runs[-1] = (runs[-1][0], i)
-        else:
-            runs.append((i, i))
-    if len(runs) > max_runs:  # one wider scan beats many small ones
-        return [(runs[0][0], runs[-1][1])]
-    return runs
-
-
 def _from_rollups(topic: str, field: str, level: int, width: int, b0: int, b1: int) -> dict[int, Agg] | None:
     """Buckets b0..b1 summed from the rollups; None when ``field`` is not rolled up (read the JSON instead)."""
     if not Rollup.objects.filter(topic=topic, level_s=level, field=field).exists():
@@ -121,34 +107,15 @@ def _from_rollups(topic: str, field: str, level: int, width: int, b0: int, b1: i
                                (b1 + 1) * width // per_slot])
 
 
-def _from_samples(topic: str, field: str, width: int, b0: int, b1: int, now: float | None) -> dict[int, Agg]:
-    """Buckets b0..b1 from the JSON: the cached settled ones, the rest scanned (and cached once settled)."""
+def _from_samples(topic: str, field: str, width: int, b0: int, b1: int) -> dict[int, Agg]:
+    """Buckets b0..b1 from the JSON."""
     sql, path_params = _sql(parse_field(field))
-    settled = math.floor(((now or time.time()) - SETTLE_S) * 1000 / width) - 1
-    cached: dict[int, Agg] = {
-        r.index: (r.t_first, r.vmin, r.vmax, r.vsum, r.n)
-        for r in SeriesBucket.objects.filter(
-            topic=topic, field=field, width_ms=width, index__gte=b0, index__lte=min(b1, settled)
-        )
-    }
-    missing = [i for i in range(b0, b1 + 1) if i not in cached]
-    fresh: dict[int, Agg] = {}
     adapt = connection.ops.adapt_datetimefield_value
-    for lo, hi in _runs(missing):  # buckets lo..hi (inclusive) straight from the samples
-        start, end = adapt(utc(lo * width / 1000)), adapt(utc((hi + 1) * width / 1000))
-        fresh.update(_buckets(sql, [width, *path_params, topic, start, end]))
-    to_cache = [
-        SeriesBucket(topic=topic, field=field, width_ms=width, index=i, t_first=a[0], vmin=a[1], vmax=a[2],
-                     vsum=a[3], n=a[4])
-        for i in missing if i <= settled
-        for a in [fresh.get(i, (None, None, None, None, 0))]
-    ]
-    SeriesBucket.objects.bulk_create(to_cache, ignore_conflicts=True, batch_size=500)
-    return cached | fresh
+    start, end = adapt(utc(b0 * width / 1000)), adapt(utc((b1 + 1) * width / 1000))
+    return _buckets(sql, [width, *path_params, topic, start, end])
 
 
-def series(*, topic: str, field: str, start: datetime, end: datetime, max_points: int,
-           now: float | None = None) -> Series:
+def series(*, topic: str, field: str, start: datetime, end: datetime, max_points: int) -> Series:
     """At most ``max_points`` buckets of ``field`` between start and end (bucket edges on the grid)."""
     parse_field(field)
     t0, t1 = start.timestamp(), end.timestamp()
@@ -157,7 +124,7 @@ def series(*, topic: str, field: str, start: datetime, end: datetime, max_points
     level = level_for(width)
     buckets = _from_rollups(topic, field, level, width, b0, b1) if level else None
     if buckets is None:
-        buckets = _from_samples(topic, field, width, b0, b1, now)
+        buckets = _from_samples(topic, field, width, b0, b1)
     kept = [buckets[i] for i in sorted(buckets) if b0 <= i <= b1 and buckets[i][4]]  # n > 0: all of it is set
     t, vmin, vmax, vsum, n = map(list, zip(*kept, strict=True)) if kept else ([], [], [], [], [])
     return Series(topic=topic, field=field, bucket_s=width / 1000, t=t, min=vmin, max=vmax,

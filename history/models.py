@@ -71,8 +71,9 @@ class Sample(models.Model):
         return f"{self.topic} @ {self.received_at.isoformat()}"
 
 
-class Aggregate(models.Model):
-    """Min, max, sum and count of one numeric field over a span, and the time of its first sample."""
+class Rollup(models.Model):
+    """Min, max, sum and count of a numeric field over one second or minute (``slot`` = floor(epoch /
+    level_s)), and the time of its first sample; kept at write time."""
 
     topic = models.CharField(max_length=255)
     field = models.CharField(max_length=255)
@@ -81,29 +82,6 @@ class Aggregate(models.Model):
     vmax = models.FloatField(null=True)
     vsum = models.FloatField(null=True)
     n = models.IntegerField(default=0)
-
-    class Meta:
-        abstract = True
-
-
-class SeriesBucket(Aggregate):
-    """One settled min/max bucket of a field's series; buckets sit on a fixed grid per width."""
-
-    width_ms = models.BigIntegerField()
-    index = models.BigIntegerField()
-
-    class Meta:
-        constraints = [
-            models.UniqueConstraint(fields=["topic", "field", "width_ms", "index"], name="history_bucket_unique")
-        ]
-
-    def __str__(self) -> str:
-        return f"{self.topic} {self.field} [{self.width_ms} ms #{self.index}]"
-
-
-class Rollup(Aggregate):
-    """A numeric field over one second or minute (``slot`` = floor(epoch / level_s)), kept at write time."""
-
     level_s = models.IntegerField()
     slot = models.BigIntegerField()
 

@@ -12,18 +12,15 @@ import asyncio
 import json
 import logging
 import math
-import time
-from collections import defaultdict
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from typing import Any
 
 from django.db import close_old_connections, connection, transaction
-from django.db.models import BigIntegerField, ExpressionWrapper, F
 
 from cyborg_site.text import scrub
 from history.frames import Frame, write_frames
-from history.models import Rollup, Sample, SeriesBucket
+from history.models import Rollup, Sample
 from history.rollup import LEVELS_S, Aggregates, aggregate
 from robot.live.state import jsonable
 from robot.supervisor import spawn
@@ -38,9 +35,6 @@ Pending = tuple[str, str, dict[str, Any], float]
 # What the recorder's one buffer holds (messages and camera frames), and what its writer is given.
 Taken = Pending | Frame
 Item = Row | Frame
-
-# Buckets newer than this may still get rows (batches in flight, periodic samples); never cached.
-SETTLE_S = 10.0
 
 _TABLE = Sample._meta.db_table
 _COLUMNS = "topic, msg_type, received_at, data"
@@ -164,30 +158,7 @@ def write_rows(rows: Sequence[Row]) -> int:
                     [(row[0], row[1], adapt(utc(row[2])), row[3]) for row in rows],
                 )
         write_rollups(aggregate((r[0], r[2], r[4] if len(r) > 4 else json.loads(r[3])) for r in rows))
-        _forget_late_buckets(rows)
     return len(rows)
-
-
-def _forget_late_buckets(rows: Sequence[Row]) -> None:
-    horizon = time.time() - SETTLE_S
-    late: dict[str, list[float]] = defaultdict(list)
-    for row in rows:
-        if row[2] < horizon:
-            late[row[0]].append(row[2])
-    for topic, times in late.items():
-        forget_buckets(topic=topic, start=min(times), end=max(times))
-
-
-def forget_buckets(*, topic: str, start: float | None, end: float) -> int:
-    """Drop cached buckets of ``topic`` that overlap [start, end] (epoch seconds; no start: all before end)."""
-    big: BigIntegerField[int, int] = BigIntegerField()
-    buckets = SeriesBucket.objects.filter(topic=topic).alias(
-        b_start=ExpressionWrapper(F("index") * F("width_ms"), output_field=big),
-        b_end=ExpressionWrapper((F("index") + 1) * F("width_ms"), output_field=big),
-    ).filter(b_start__lte=math.ceil(end * 1000))
-    if start is not None:
-        buckets = buckets.filter(b_end__gt=math.floor(start * 1000))
-    return buckets.delete()[0]
 
 
 _ROLLUP_COLUMNS = "topic, level_s, field, slot, t_first, vmin, vmax, vsum, n"
@@ -224,22 +195,16 @@ def write_rollups(aggregates: Aggregates) -> None:
             cursor.executemany(_rollup_upsert("sqlite"), rows)  # type: ignore[arg-type]  # floats and strs
 
 
-def rebuild_rollups(*, topic: str, start: float | None, end: float) -> None:
-    """Recompute ``topic``'s rollup slots overlapping [start, end] from its samples (after deleting some)."""
-    for level in LEVELS_S:
-        hi = math.floor(end / level) + 1
-        rollups = Rollup.objects.filter(topic=topic, level_s=level, slot__lt=hi)
-        samples = Sample.objects.filter(topic=topic, received_at__lt=utc(hi * level))
-        if start is not None:
-            lo = math.floor(start / level)
-            rollups, samples = rollups.filter(slot__gte=lo), samples.filter(received_at__gte=utc(lo * level))
-        rollups.delete()
-        kept = samples.values_list("received_at", "data").iterator(chunk_size=2000)
-        write_rollups(aggregate(((topic, at.timestamp(), data) for at, data in kept), levels=(level,)))
-
-
 def samples_deleted(*, topic: str, start: float | None, end: float) -> None:
-    """Bring rollups and cached buckets in line after ``topic``'s samples in [start, end] were deleted."""
+    """Recompute ``topic``'s rollup slots overlapping [start, end] from its samples, after some were deleted."""
     with transaction.atomic():
-        rebuild_rollups(topic=topic, start=start, end=end)
-        forget_buckets(topic=topic, start=start, end=end)
+        for level in LEVELS_S:
+            hi = math.floor(end / level) + 1
+            rollups = Rollup.objects.filter(topic=topic, level_s=level, slot__lt=hi)
+            samples = Sample.objects.filter(topic=topic, received_at__lt=utc(hi * level))
+            if start is not None:
+                lo = math.floor(start / level)
+                rollups, samples = rollups.filter(slot__gte=lo), samples.filter(received_at__gte=utc(lo * level))
+            rollups.delete()
+            kept = samples.values_list("received_at", "data").iterator(chunk_size=2000)
+            write_rollups(aggregate(((topic, at.timestamp(), data) for at, data in kept), levels=(level,)))
