@@ -222,7 +222,7 @@ if env_bool("STATIC_HASHED", False):
 # --- Redis: channel layer, Celery broker, latest-state store, queues, locks, live feed --------
 # Unset, the embedded default: a private Valkey server of this process's own (robot.live.private_server),
 # started on first use on a unix socket in a fresh directory. Either way the same Redis code runs.
-EMBEDDED = not env_str("REDIS_URL")  # one process hosts the web server, the robot link and the sampling loop
+EMBEDDED = not env_str("REDIS_URL")  # one process hosts the web server, the robot link and the periodic work
 REDIS_URL = env_str("REDIS_URL") or (
     f"unix://{tempfile.gettempdir()}/cyborg-valkey-{os.getpid()}-{secrets.token_hex(4)}/valkey.sock")
 
@@ -246,7 +246,7 @@ CHANNEL_LAYERS: dict[str, dict[str, Any]] = {
 }
 # Celery's queues under the same prefix as everything else, so deployments can share one Redis.
 CELERY_BROKER_TRANSPORT_OPTIONS = {"global_keyprefix": f"{CHANNEL_LAYERS['default']['CONFIG']['prefix']}:celery:"}
-# The embedded default runs no worker: its periodic work runs in the process (history.sampling).
+# The embedded default runs no worker: its periodic work runs in the process (history.retention).
 CELERY_BROKER_URL = "memory://" if EMBEDDED else REDIS_URL
 CELERY_RESULT_BACKEND = None if EMBEDDED else REDIS_URL
 CELERY_TASK_ALWAYS_EAGER = False

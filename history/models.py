@@ -1,4 +1,4 @@
-"""Recording policies, recorded samples and the downsampling cache."""
+"""Recording policies, recorded samples, their rollups, camera frames and incidents."""
 
 from __future__ import annotations
 

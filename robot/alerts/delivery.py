@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -101,8 +100,6 @@ def send_push(subscription: dict[str, Any], record: Record) -> None:
 SENDERS: dict[str, Callable[[Any, Record], None]] = {
     "email": send_email, "push": send_push, "webhook": send_webhook,
 }
-# Delivered (channel, alert id, epoch seconds): the benches read it.
-delivered: list[tuple[str, str, float]] = []
 
 
 async def deliver(target: Target, record: Record, gate: asyncio.Semaphore, *, backoff_s: float = 1.0) -> bool:
@@ -110,8 +107,6 @@ async def deliver(target: Target, record: Record, gate: asyncio.Semaphore, *, ba
         try:
             async with gate:
                 await asyncio.to_thread(SENDERS[target.channel], target.address, record)
-            delivered.append((target.channel, record.id, time.time()))
-            del delivered[:-1000]
             return True
         except Permanent as exc:
             log.warning("alert not sent by %s: %s", target.channel, exc)

@@ -18,7 +18,7 @@ flush itself; "still writing" means the kernel has not taken the previous frame 
 (the test communicator) frames go through the consumer's ASGI send.
 
 Embedded, the robot link feeds the hub directly; scaled, each web process holds one Redis
-subscription that feeds it (robot.live.broadcast).
+subscription that feeds it (robot.live.feed).
 """
 
 from __future__ import annotations

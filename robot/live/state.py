@@ -1,7 +1,7 @@
 """The latest-state store: the newest message of every monitored topic, plus link status.
 
 In Redis (the embedded default's private server or ``REDIS_URL``), so the dashboard, the API, the
-history sampler and the link of any process read and write the same values.
+recorder and the link of any process read and write the same values.
 """
 
 from __future__ import annotations
