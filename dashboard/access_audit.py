@@ -19,6 +19,7 @@ from django.dispatch import receiver
 from django.http import HttpRequest, HttpResponseBase
 from rest_framework.authtoken.models import Token
 
+from dashboard.accounts import role_holders
 from robot.api.errors import is_api_path
 from robot.commands.audit import audit_record
 from robot.models import DomeMode, EmotionPreset, Location, SoundClip
@@ -92,15 +93,7 @@ def _roles_changed(sender: type, instance: Any, action: str, reverse: bool, pk_s
                    **kwargs: Any) -> None:
     """Each person's roles before the change (kept on ``instance``: a user, or a group when changed
     from the group's side) and after it."""
-    if not action.startswith(("pre_", "post_")):
-        return
-    if not reverse:
-        users = [instance]
-    elif action.endswith("_clear"):
-        users = list(instance.user_set.all()) if action == "pre_clear" else list(
-            User.objects.filter(pk__in=getattr(instance, "_audit_roles", {})))
-    else:
-        users = list(User.objects.filter(pk__in=pk_set or ()))
+    users = role_holders(instance, action, reverse, pk_set)
     if action.startswith("pre_"):
         instance._audit_roles = {user.pk: _role_names(user) for user in users}
         return

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import secrets
+from typing import Any
 
 from django.contrib.auth.models import Group, Permission, User
 from django.contrib.auth.password_validation import validate_password
@@ -18,6 +19,19 @@ def ensure_role_groups() -> dict[Role, Group]:
     groups = {role: Group.objects.get_or_create(name=role.value)[0] for role in Role}
     groups[Role.ADMIN].permissions.set(Permission.objects.filter(content_type__app_label__in=_ADMIN_APPS))
     return groups
+
+
+def role_holders(instance: Any, action: str, reverse: bool, pk_set: set[Any] | None) -> list[User]:
+    """The people whose roles an ``m2m_changed`` of ``User.groups`` changes: the user, or, changed from
+    a group's side, the users added or removed, or the members a clear takes (known only before it, so
+    kept on the group at ``pre_clear``)."""
+    if not reverse:
+        return [instance]
+    if action == "pre_clear":
+        instance._role_holders = list(instance.user_set.all())
+    if action.endswith("_clear"):
+        return list(getattr(instance, "_role_holders", ()))
+    return list(User.objects.filter(pk__in=pk_set or ()))
 
 
 def password_problems(password: str, *, username: str, email: str = "") -> list[str]:

@@ -21,6 +21,7 @@ from django.db.models.signals import m2m_changed, post_delete, post_save
 from django.dispatch import receiver
 
 from cyborg_site.roles import is_operator
+from dashboard.accounts import role_holders
 from robot.live.groups import person_group
 
 log = logging.getLogger(__name__)
@@ -51,18 +52,10 @@ def _saved_or_deleted(sender: type, instance: Any, created: bool = False, **kwar
 @receiver(m2m_changed, sender=get_user_model().groups.through)
 def _groups_changed(sender: type, instance: Any, action: str, reverse: bool, pk_set: set[Any] | None,
                     **kwargs: Any) -> None:
-    if not reverse:
-        if action in ("post_add", "post_remove", "post_clear"):
-            _tell(instance.pk)
-    elif action == "pre_clear":
-        # A group emptied from its side: its members are known only before the clear.
-        instance._members_cleared = list(instance.user_set.values_list("pk", flat=True))
-    elif action == "post_clear":
-        for user_id in instance.__dict__.pop("_members_cleared", ()):
-            _tell(user_id)
-    elif action in ("post_add", "post_remove"):
-        for user_id in pk_set or ():
-            _tell(user_id)
+    users = role_holders(instance, action, reverse, pk_set)  # (at pre_clear: the members the clear takes)
+    if action.startswith("post_"):
+        for user in users:
+            _tell(user.pk)
 
 
 @receiver(user_logged_out)

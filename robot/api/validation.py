@@ -11,11 +11,7 @@ from rest_framework.request import Request
 
 def body_object(request: Request) -> dict[str, Any]:
     """The body as a dict (JSON object or form); anything else is a 400, never a crash."""
-    return body_dict(request.data)
-
-
-def body_dict(data: Any) -> dict[str, Any]:
-    """``body_object`` for a body already parsed."""
+    data = request.data
     if hasattr(data, "dict"):  # a form's QueryDict: one value per field
         return data.dict()
     if isinstance(data, dict):
