@@ -130,7 +130,7 @@ class SampleAdmin(_ReadOnlyAdmin):
         self.delete_queryset(request, Sample.objects.filter(pk=obj.pk))
 
     def delete_queryset(self, request: HttpRequest, queryset: QuerySet[Sample]) -> None:
-        """Delete, then rebuild the rollups and forget the cached buckets the deleted samples were in."""
+        """Delete, then rebuild the rollups the deleted samples were in."""
         with transaction.atomic():
             spans = list(queryset.order_by().values("topic").annotate(lo=Min("received_at"), hi=Max("received_at")))
             queryset.delete()
