@@ -11,6 +11,7 @@ from django.db import transaction
 from history.models import CameraFrame, Incident
 from history.storage import utc
 from robot import interface as ri
+from robot.alerts.rules import LOG_ERROR, pressed_bumpers
 from robot.models import AuditEntry
 
 # The black box's topics: those the triggers read, and those an incident keeps every message of
@@ -38,11 +39,11 @@ class Triggers:
         key = self._names.get(name)
         if key == "rosout":
             level = msg.get("level")
-            if isinstance(level, int) and level >= 8:
+            if isinstance(level, int) and level >= LOG_ERROR:
                 text = f"{ri.LOG_LEVELS.get(level, level)} {msg.get('name', '')}: {msg.get('msg', '')}"
                 return Incident.Kind.LOG_ERROR, text[:300]
         elif key == "bumper_state":
-            pressed = [side for side in ("front", "rear") if any(msg.get(f"{side}_bumpers") or ())]
+            pressed = pressed_bumpers(msg)
             was, self._bumped = self._bumped, bool(pressed)
             if pressed and not was:
                 return Incident.Kind.BUMPER, f"{' and '.join(pressed)} bumper pressed"
