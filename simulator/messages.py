@@ -1,10 +1,10 @@
-"""ROS 1 message schemas and rosbridge-style JSON conversion.
+"""Message schemas and rosbridge-style JSON conversion.
 
-Only the types the Cyborg uses are known. Incoming messages are validated and
-normalised the way rosbridge_library's ``message_conversion`` does it (ROS 1 branch):
-unknown keys and float-for-int values are rejected, ints are fine for floats, missing
-fields take defaults, a ``header`` object without a stamp is stamped now, byte arrays
-travel as base64.
+The standard ROS message definitions are rosbags' (ROS 1 Noetic's and ROS 2 Jazzy's type stores); the
+Cyborg's own types and the few standard ones rosbags does not ship are written out below. Incoming
+messages are validated and normalised the way rosbridge_library's ``message_conversion`` does it (ROS 1
+branch): unknown keys and float-for-int values are rejected, ints are fine for floats, missing fields take
+defaults, a ``header`` object without a stamp is stamped now, byte arrays travel as base64.
 """
 
 from __future__ import annotations
@@ -17,50 +17,21 @@ import time
 from typing import Any
 
 import numpy as np
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-# Message definitions in the .msg syntax ("type name" pairs separated by ';').
+from robot import interface as ri
+
+# Types rosbags' stores lack, in the .msg syntax ("type name" pairs separated by ';').
 _DEFS: dict[str, str] = {
-    "std_msgs/Header": "uint32 seq; time stamp; string frame_id",
-    "std_msgs/Empty": "",
     "audio_common_msgs/AudioData": "uint8[] data",
     "audio_common_msgs/AudioInfo": (
         "uint8 channels; uint32 sample_rate; string sample_format; uint32 bitrate; string coding_format"
     ),
-    "geometry_msgs/Vector3": "float64 x; float64 y; float64 z",
-    "geometry_msgs/Point": "float64 x; float64 y; float64 z",
-    "geometry_msgs/Point32": "float32 x; float32 y; float32 z",
-    "geometry_msgs/PointStamped": "std_msgs/Header header; geometry_msgs/Point point",
-    "geometry_msgs/Quaternion": "float64 x; float64 y; float64 z; float64 w",
-    "geometry_msgs/Pose": "geometry_msgs/Point position; geometry_msgs/Quaternion orientation",
-    "geometry_msgs/Pose2D": "float64 x; float64 y; float64 theta",
-    "geometry_msgs/PoseStamped": "std_msgs/Header header; geometry_msgs/Pose pose",
-    "geometry_msgs/PoseWithCovariance": "geometry_msgs/Pose pose; float64[36] covariance",
-    "geometry_msgs/PoseWithCovarianceStamped": "std_msgs/Header header; geometry_msgs/PoseWithCovariance pose",
-    "geometry_msgs/PoseArray": "std_msgs/Header header; geometry_msgs/Pose[] poses",
-    "geometry_msgs/Polygon": "geometry_msgs/Point32[] points",
-    "geometry_msgs/PolygonStamped": "std_msgs/Header header; geometry_msgs/Polygon polygon",
-    "geometry_msgs/Twist": "geometry_msgs/Vector3 linear; geometry_msgs/Vector3 angular",
-    "geometry_msgs/TwistStamped": "std_msgs/Header header; geometry_msgs/Twist twist",
-    "geometry_msgs/TwistWithCovariance": "geometry_msgs/Twist twist; float64[36] covariance",
-    "geometry_msgs/Transform": "geometry_msgs/Vector3 translation; geometry_msgs/Quaternion rotation",
-    "geometry_msgs/TransformStamped": (
-        "std_msgs/Header header; string child_frame_id; geometry_msgs/Transform transform"
-    ),
-    "nav_msgs/MapMetaData": (
-        "time map_load_time; float32 resolution; uint32 width; uint32 height; geometry_msgs/Pose origin"
-    ),
-    "nav_msgs/OccupancyGrid": "std_msgs/Header header; nav_msgs/MapMetaData info; int8[] data",
     "map_msgs/OccupancyGridUpdate": (
         "std_msgs/Header header; int32 x; int32 y; uint32 width; uint32 height; int8[] data"
     ),
-    "nav_msgs/Path": "std_msgs/Header header; geometry_msgs/PoseStamped[] poses",
-    "nav_msgs/Odometry": (
-        "std_msgs/Header header; string child_frame_id; geometry_msgs/PoseWithCovariance pose; "
-        "geometry_msgs/TwistWithCovariance twist"
-    ),
-    "actionlib_msgs/GoalID": "time stamp; string id",
-    "actionlib_msgs/GoalStatus": "actionlib_msgs/GoalID goal_id; uint8 status; string text",
-    "actionlib_msgs/GoalStatusArray": "std_msgs/Header header; actionlib_msgs/GoalStatus[] status_list",
+    "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms",
     "move_base_msgs/MoveBaseGoal": "geometry_msgs/PoseStamped target_pose",
     "move_base_msgs/MoveBaseResult": "",
     "move_base_msgs/MoveBaseFeedback": "geometry_msgs/PoseStamped base_position",
@@ -73,27 +44,7 @@ _DEFS: dict[str, str] = {
         "float32 current_arousal; float32 current_dominance"
     ),
     "cyborg_controller/EmotionalFeedback": "float32 delta_pleasure; float32 delta_arousal; float32 delta_dominance",
-    "rosgraph_msgs/Log": (
-        "std_msgs/Header header; int8 level; string name; string msg; string file; string function; "
-        "uint32 line; string[] topics"
-    ),
-    "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms",
-    "sensor_msgs/ChannelFloat32": "string name; float32[] values",
-    "sensor_msgs/PointCloud": (
-        "std_msgs/Header header; geometry_msgs/Point32[] points; sensor_msgs/ChannelFloat32[] channels"
-    ),
-    "sensor_msgs/LaserScan": (
-        "std_msgs/Header header; float32 angle_min; float32 angle_max; float32 angle_increment; "
-        "float32 time_increment; float32 scan_time; float32 range_min; float32 range_max; float32[] ranges; "
-        "float32[] intensities"
-    ),
-    "sensor_msgs/CompressedImage": "std_msgs/Header header; string format; uint8[] data",
     "rosaria/BumperState": "std_msgs/Header header; bool[] front_bumpers; bool[] rear_bumpers",
-    "diagnostic_msgs/KeyValue": "string key; string value",
-    "diagnostic_msgs/DiagnosticStatus": (
-        "byte level; string name; string message; string hardware_id; diagnostic_msgs/KeyValue[] values"
-    ),
-    "diagnostic_msgs/DiagnosticArray": "std_msgs/Header header; diagnostic_msgs/DiagnosticStatus[] status",
     "smach_msgs/SmachContainerStatus": (
         "std_msgs/Header header; string path; string[] initial_states; string[] active_states; "
         "string local_data; string info"
@@ -104,10 +55,6 @@ _DEFS: dict[str, str] = {
     ),
     "rosbridge_msgs/ConnectedClient": "string ip_address; time connection_time",
     "rosbridge_msgs/ConnectedClients": "rosbridge_msgs/ConnectedClient[] clients",
-    # ROS 2 (schemas keyed by the two-part name; ``canonical`` maps pkg/msg/Type to it)
-    "rcl_interfaces/Log": (
-        "time stamp; uint8 level; string name; string msg; string file; string function; uint32 line"
-    ),
     "nav2_msgs/Particle": "geometry_msgs/Pose pose; float64 weight",
     "nav2_msgs/ParticleCloud": "std_msgs/Header header; nav2_msgs/Particle[] particles",
     "nav2_msgs/NavigateToPoseGoal": "geometry_msgs/PoseStamped pose; string behavior_tree",
@@ -116,47 +63,20 @@ _DEFS: dict[str, str] = {
         "geometry_msgs/PoseStamped current_pose; duration navigation_time; duration estimated_time_remaining; "
         "int16 number_of_recoveries; float32 distance_remaining"
     ),
-    "unique_identifier_msgs/UUID": "uint8[16] uuid",
-    "action_msgs/GoalInfo": "unique_identifier_msgs/UUID goal_id; time stamp",
-    "action_msgs/GoalStatus": "action_msgs/GoalInfo goal_info; int8 status",
-    "action_msgs/GoalStatusArray": "action_msgs/GoalStatus[] status_list",
     "rosapi/TypeDef": (
         "string type; string[] fieldnames; string[] fieldtypes; int32[] fieldarraylen; string[] examples; "
         "string[] constnames; string[] constvalues"
     ),
 }
 
-# std_msgs' wrappers of one primitive: std_msgs/UInt8 is "uint8 data".
-for _name in ("String", "Bool", "Float32", "Float64", "Int8", "UInt8", "Int16", "Int32", "Int64", "UInt32", "Time"):
-    _DEFS[f"std_msgs/{_name}"] = f"{_name.lower()} data"
-
 # actionlib wrappers, generated the way genaction does.
 for _action in ("move_base_msgs/MoveBase", "cyborg_navigation/Navigation"):
     _DEFS[f"{_action}ActionGoal"] = f"std_msgs/Header header; actionlib_msgs/GoalID goal_id; {_action}Goal goal"
-    _DEFS[f"{_action}ActionResult"] = (
-        f"std_msgs/Header header; actionlib_msgs/GoalStatus status; {_action}Result result"
-    )
-    _DEFS[f"{_action}ActionFeedback"] = (
-        f"std_msgs/Header header; actionlib_msgs/GoalStatus status; {_action}Feedback feedback"
-    )
+    for _part in ("Result", "Feedback"):
+        _DEFS[f"{_action}Action{_part}"] = (f"std_msgs/Header header; actionlib_msgs/GoalStatus status; "
+                                            f"{_action}{_part} {_part.lower()}")
 
 # Services: (request definition, response definition).
-_THREE_PART = re.compile(r"/(?:msg|srv|action)/")
-
-
-def canonical(type_name: str) -> str:
-    """The schema's name of a type in either spelling: ``geometry_msgs/msg/Twist`` is ``geometry_msgs/Twist``."""
-    if type_name.count("/") != 2:
-        return type_name
-    two_part = _THREE_PART.sub("/", type_name, count=1)
-    return "rosapi/" + two_part[len("rosapi_msgs/"):] if two_part.startswith("rosapi_msgs/") else two_part
-
-
-def known_package(msg_type: str) -> bool:
-    """Whether the robot has the message package of ``msg_type`` (rosbridge can import its classes)."""
-    return any(name.split("/", 1)[0] == msg_type.split("/", 1)[0] for name in _DEFS)
-
-
 SERVICE_DEFS: dict[str, tuple[str, str]] = {
     "std_srvs/Empty": ("", ""),
     "std_srvs/Trigger": ("", "bool success; string message"),
@@ -188,6 +108,61 @@ for _srv, (_req, _resp) in SERVICE_DEFS.items():
     _DEFS[f"{_srv}Request"] = _req
     _DEFS[f"{_srv}Response"] = _resp
 
+
+def store_name(msg_type: str) -> str:
+    """rosbags' name of a type: ``pkg/msg/Type`` (a two-part name gains its ``msg``)."""
+    pkg, *_, name = msg_type.split("/")
+    return f"{pkg}/msg/{name}"
+
+
+STORES = {ri.ROS1: get_typestore(Stores.ROS1_NOETIC), ri.ROS2: get_typestore(Stores.ROS2_JAZZY)}
+for _store in STORES.values():
+    _store.register({n: d for k, v in _DEFS.items() for n, d in get_types_from_msg(v.replace(";", "\n"),
+                                                                                   store_name(k)).items()
+                     if n not in _store.fielddefs})
+# ROS 2's own types (rcl_interfaces/Log, action_msgs, ...) are known to the schemas of either dialect.
+STORES[ri.ROS1].register({n: d for n, d in STORES[ri.ROS2].fielddefs.items() if n not in STORES[ri.ROS1].fielddefs})
+_TIMES = {"builtin_interfaces/msg/Time": "time", "builtin_interfaces/msg/Duration": "duration"}
+_PLACEHOLDER = "structure_needs_at_least_one_member"  # rosbags' field of an empty message
+
+
+def _two_part(name: str) -> str:
+    return _TIMES.get(name) or name.replace("/msg/", "/", 1)
+
+
+def _schema_field(name: str, desc: tuple[Any, Any]) -> tuple[str, str, int | None]:
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        return name, detail[0], None
+    if kind == Nodetype.NAME:
+        return name, _two_part(detail), None
+    (item_kind, item), length = detail
+    return name, item[0] if item_kind == Nodetype.BASE else _two_part(item), length if kind == Nodetype.ARRAY else -1
+
+
+# two-part name -> [(field, base type, array length: None for a scalar, -1 variable, N fixed)]
+SCHEMAS: dict[str, list[tuple[str, str, int | None]]] = {
+    _two_part(n): [_schema_field(f, desc) for f, desc in fields if f != _PLACEHOLDER]
+    for n, (_, fields) in STORES[ri.ROS1].fielddefs.items() if n not in _TIMES}
+_THREE_PART = re.compile(r"/(?:msg|srv|action)/")
+
+
+def canonical(type_name: str) -> str:
+    """The schema's name of a type in either spelling: ``geometry_msgs/msg/Twist`` is ``geometry_msgs/Twist``."""
+    if type_name.count("/") != 2:
+        return type_name
+    two_part = _THREE_PART.sub("/", type_name, count=1)
+    return "rosapi/" + two_part[len("rosapi_msgs/"):] if two_part.startswith("rosapi_msgs/") else two_part
+
+
+_PACKAGES = frozenset(name.split("/", 1)[0] for name in SCHEMAS)
+
+
+def known_package(msg_type: str) -> bool:
+    """Whether the robot has the message package of ``msg_type`` (rosbridge can import its classes)."""
+    return msg_type.split("/", 1)[0] in _PACKAGES
+
+
 INT_RANGES: dict[str, tuple[int, int]] = {
     t: (int(np.iinfo(t).min), int(np.iinfo(t).max))
     for t in ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64")
@@ -205,15 +180,6 @@ _TIME_KEYS = {"sec": "secs", "nanosec": "nsecs"}
 
 class ConversionError(Exception):
     """An incoming message does not fit its type (rosbridge's conversion exceptions)."""
-
-
-def _parse(definition: str) -> list[tuple[str, str, int | None]]:
-    """[(name, base type, array length)] where length is None (scalar), -1 (variable) or N."""
-    return [(m["name"], m["type"], None if m["size"] is None else int(m["size"] or -1))
-            for m in re.finditer(r"(?P<type>[\w/]+)(?:\[(?P<size>\d*)\])?\s+(?P<name>\w+)", definition)]
-
-
-SCHEMAS: dict[str, list[tuple[str, str, int | None]]] = {k: _parse(v) for k, v in _DEFS.items()}
 
 
 def known(msg_type: str) -> bool:

@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import messages, rawtypes
+from . import messages
 from .dialect import ROS1, Dialect
 
 log = logging.getLogger("simulator.rosbridge")
@@ -60,7 +60,7 @@ class Subscription:
     params: dict[Any, tuple[int, int]] = field(default_factory=dict)  # sid -> (throttle ms, queue length)
     throttle_s: float = 0.0
     last_sent: float = 0.0
-    raw: bool = False  # compression cbor-raw: CBOR frames with the serialized message (simulator.rawtypes)
+    raw: bool = False  # compression cbor-raw: CBOR frames with the serialized message (Dialect.raw_frame)
     queue: collections.deque[str | bytes] | None = None
     wake: asyncio.Event | None = None
     pump: asyncio.Task[None] | None = None
@@ -161,7 +161,7 @@ class Broker:
         raw: bytes | None = None
         for sub in list(subs.values()) if subs else ():
             if sub.raw:
-                raw = raw or rawtypes.cbor_raw_frame(topic, self.types.get(topic, ""), msg)
+                raw = raw or self.dialect.raw_frame(topic, self.types.get(topic, ""), msg)
                 sub.offer(raw)
             else:
                 sub.offer(frame)
@@ -362,7 +362,7 @@ class Client:
         sub.update()
         latched = self.broker.latched_frame(topic)
         if latched is not None:
-            self.send(rawtypes.cbor_raw_frame(topic, self.broker.types[topic], json.loads(latched)["msg"])
+            self.send(self.broker.dialect.raw_frame(topic, self.broker.types[topic], json.loads(latched)["msg"])
                       if sub.raw else latched)
 
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:

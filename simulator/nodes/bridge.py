@@ -15,7 +15,7 @@ import random
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .. import messages, rawtypes
+from .. import messages
 from ..bus import Bus, SimNode
 from ..protocol import NoAnswer, ServiceError
 
@@ -51,7 +51,7 @@ class BridgeNode(SimNode):
                                               "types": [broker.types[n] for n in sorted(broker.types)]})
         bus.answer_name("/rosapi/topics_and_raw_types", "rosapi/TopicsAndRawTypes", lambda r: {
             "topics": sorted(broker.types), "types": [broker.types[n] for n in sorted(broker.types)],
-            "typedefs_full_text": [rawtypes.full_text(broker.types[n]) for n in sorted(broker.types)]})
+            "typedefs_full_text": [bus.dialect.full_text(broker.types[n]) for n in sorted(broker.types)]})
         bus.answer("rosapi_topic_type", lambda r: {"type": broker.types.get(r["topic"], "")})
         bus.answer("rosapi_services", lambda r: {"services": sorted(broker.services)})
         bus.answer("rosapi_get_time", lambda r: {"time": messages.stamp()})

@@ -20,6 +20,7 @@ import pytest
 from websockets.sync.client import connect
 
 from robot import interface as ri
+from simulator import SimThread
 from tests.frontdoor.conftest import ticket_url
 
 FOXGLOVE = Path(__file__).parent / "foxglove"
@@ -43,7 +44,8 @@ def decode(ros: int, messages: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return json.loads(done.stdout)
 
 
-def foxglove_session(url: str, topics: list[str], window_s: float) -> tuple[dict[str, str], dict[str, list[dict]]]:
+def foxglove_session(url: str, topics: list[str], window_s: float,
+                     ros: int = 1) -> tuple[dict[str, str], dict[str, list[dict]]]:
     """Foxglove's steps: topics and definitions, then cbor-raw subscriptions with no throttle. Returns the
     topics' types and full definitions, and per topic the frames' decoded CBOR (``msg``: secs, nsecs, bytes)."""
     got: dict[str, list[dict]] = {t: [] for t in topics}
@@ -55,7 +57,8 @@ def foxglove_session(url: str, topics: list[str], window_s: float) -> tuple[dict
                 assert frame["result"], frame
                 break
         values = frame["values"]
-        assert "rosgraph_msgs/Log" in values["types"]  # how Foxglove tells ROS 1
+        # how Foxglove tells ROS 1 from ROS 2
+        assert {1: "rosgraph_msgs/Log", 2: "rcl_interfaces/msg/Log"}[ros] in values["types"]
         definitions = dict(zip(values["topics"], zip(values["types"], values["typedefs_full_text"], strict=True),
                                strict=True))
         for topic in topics:
@@ -111,16 +114,16 @@ def same(decoded: Any, sent: Any, path: str = "") -> None:
 
 def _stamp(msg: dict) -> tuple:
     stamp = msg["header"]["stamp"]
-    return (stamp["secs"], stamp["nsecs"]) if "secs" in stamp else (stamp["sec"], stamp["nsec"])
+    return stamp.get("secs", stamp.get("sec")), stamp.get("nsecs", stamp.get("nsec", stamp.get("nanosec")))
 
 
 def check(definitions: dict[str, tuple[str, str]], frames: dict[str, list[dict]],
-          robot: dict[str, list[dict]]) -> None:
+          robot: dict[str, list[dict]], ros: int = 1) -> None:
     for topic, msgs in frames.items():
         assert msgs, f"no cbor-raw frame for {topic}"
         msg_type, text = definitions[topic]
-        decoded = decode(1, [{"type": msg_type, "definition": text, "bytes_b64": base64.b64encode(m["bytes"]).decode()}
-                             for m in msgs])
+        decoded = decode(ros, [{"type": msg_type, "definition": text,
+                                "bytes_b64": base64.b64encode(m["bytes"]).decode()} for m in msgs])
         if "header" in robot[topic][0]:
             by_stamp = {_stamp(m): m for m in robot[topic]}
             matched = [(d, by_stamp[_stamp(d)]) for d in decoded if _stamp(d) in by_stamp]
@@ -157,6 +160,20 @@ def test_the_simulator_serves_cbor_raw_like_the_real_server(stack):
     definitions, frames = foxglove_session(url, topics, WINDOW_S)
     reference.join()
     check(definitions, frames, robot)
+
+
+def test_the_ros2_simulator_serves_cdr_with_ros2_definitions():
+    topics = [ODOM, SCAN, ri.topic("amcl_pose", ri.ROS2).name]
+    robot: dict[str, list[dict]] = {t: [] for t in topics}
+    with SimThread(ros=2, startup_s=0.5) as sim:
+        reference = threading.Thread(target=published, args=(sim.url, topics, WINDOW_S + 2, robot))
+        reference.start()
+        time.sleep(0.5)
+        definitions, frames = foxglove_session(sim.url, topics, WINDOW_S, ros=2)
+        reference.join()
+    assert definitions[ODOM][0] == "nav_msgs/msg/Odometry"
+    assert definitions[ODOM][1] == ROS2_ODOMETRY  # rosapi's layout, ROS 2's Header and Time
+    check(definitions, frames, robot, ros=2)
 
 
 ROS2_ODOMETRY = """std_msgs/Header header

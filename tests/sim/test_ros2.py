@@ -85,6 +85,20 @@ def test_type_names_go_out_in_three_parts_and_both_spellings_come_in(sim2, ros2,
     wait_until(lambda: sim2.received("/cmd_vel"))
 
 
+def test_raw_types_are_ros_2_definitions_as_roslibpy_reads_them(ros2):
+    service = roslibpy.Service(ros2, "/rosapi/topics_and_raw_types", "rosapi_msgs/srv/TopicsAndRawTypes")
+    values = service.call(roslibpy.ServiceRequest(), timeout=10)
+    by_topic = dict(zip(values["topics"], zip(values["types"], values["typedefs_full_text"], strict=True),
+                        strict=True))
+    log_type, log_text = by_topic["/rosout"]
+    assert log_type == "rcl_interfaces/msg/Log" and "rosgraph_msgs/Log" not in values["types"]
+    assert log_text.startswith("uint8 DEBUG=10\n") and "builtin_interfaces/Time stamp" in log_text
+    odom_type, odom_text = by_topic["/odom"]
+    assert odom_type == "nav_msgs/msg/Odometry"
+    assert "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" in odom_text  # no seq
+    assert "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n" in odom_text
+
+
 def test_stamps_are_sec_and_nanosec_headers_have_no_seq_and_both_spellings_come_in(sim2, ros2):
     odom = subscribe(ros2, "/odom", "nav_msgs/msg/Odometry").wait_for(lambda m: True, what="odometry")
     assert set(odom["header"]) == {"stamp", "frame_id"}
