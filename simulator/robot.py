@@ -26,11 +26,10 @@ from .dialect import DIALECTS
 from .nodes.audiovisual import AudioVisualNode, Microphone, Speaker
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
-from .nodes.commander import CommanderNode
-from .nodes.controller import ControllerNode, StateMachine
+from .nodes.controller import CommanderNode, ControllerNode, StateMachine
 from .nodes.costmaps import CostmapNode
 from .nodes.diagnostics import DiagnosticsNode
-from .nodes.emotion import EmotionNode, EmotionSystem
+from .nodes.emotion import EmotionNode
 from .nodes.laser import LaserNode
 from .nodes.localisation import LocalisationNode
 from .nodes.navigation import NavigationNode
@@ -239,8 +238,8 @@ class SimRobot:
         return self.controller.sm
 
     @property
-    def emotions(self) -> EmotionSystem:
-        return self.emotion_node.emotions
+    def emotions(self) -> EmotionNode:
+        return self.emotion_node
 
     @property
     def mic(self) -> Microphone:

@@ -1,13 +1,19 @@
-"""The simulated world: occupancy maps, named locations, A* planning and the base's physics."""
+"""The simulated world: occupancy maps, named locations, A* planning, the base's physics, and the message
+shapes several nodes build from them (a pose in the map, a tf transform, an occupancy grid)."""
 
 from __future__ import annotations
 
 import heapq
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt
+
+from robot import interface as ri
+
+from . import messages
 
 RESOLUTION = 0.05  # m/cell, like the Cyborg's gmapping maps
 ROBOT_RADIUS = 0.2  # m, footprint used for collisions (the Pioneer LX is ~0.35 m, we are generous)
@@ -311,3 +317,23 @@ class Base:
     def teleport(self, x: float, y: float, yaw: float) -> None:
         self.x, self.y, self.yaw = x, y, wrap(yaw)
         self.v = self.w = self.cmd_v = self.cmd_w = 0.0
+
+
+def pose(x: float, y: float, yaw: float) -> dict[str, Any]:
+    return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": yaw_to_quaternion(yaw)}
+
+
+def body_pose(b: Base) -> dict[str, Any]:
+    return pose(b.x, b.y, b.yaw)
+
+
+def transform(parent: str, child: str, x: float, y: float, yaw: float) -> dict[str, Any]:
+    return {"header": messages.header(parent), "child_frame_id": child,
+            "transform": {"translation": {"x": x, "y": y, "z": 0.0}, "rotation": yaw_to_quaternion(yaw)}}
+
+
+def grid(data: list[int], width: int, height: int, res: float, ox: float, oy: float,
+         load_time: dict[str, int], frame: str = ri.MAP_FRAME) -> dict[str, Any]:
+    return {"header": messages.header(frame), "info": {
+        "map_load_time": load_time, "resolution": res, "width": width, "height": height,
+        "origin": pose(ox, oy, 0.0)}, "data": data}

@@ -10,7 +10,6 @@ from typing import Any
 
 from .. import messages, world
 from ..bus import Bus, SimNode
-from .shapes import body_pose, pose, transform
 
 NODE = "/RosAria"
 SONAR_X = 0.1  # the sonar ring's offset ahead of base_link
@@ -52,8 +51,8 @@ class BaseNode(SimNode):
         bus.every(1.0, self._pub_battery)
         bus.every(1.0, lambda: bus.publish("motors_state", {"data": self.body.motors}))
         bus.publish("tf_static", {"transforms": [
-            transform("base_link", "laser", 0.2, 0.0, 0.0),
-            transform("base_link", "sonar", SONAR_X, 0.0, 0.0),
+            world.transform("base_link", "laser", 0.2, 0.0, 0.0),
+            world.transform("base_link", "sonar", SONAR_X, 0.0, 0.0),
         ]})
 
     def voltage(self) -> float:
@@ -102,14 +101,14 @@ class BaseNode(SimNode):
     def _pub_pose(self) -> None:
         bus, b = self.bus, self.body
         if bus.wants("robot_pose"):
-            bus.publish("robot_pose", body_pose(b))
+            bus.publish("robot_pose", world.body_pose(b))
         # Numbered at the robot's rate whether or not anyone listens: a gap in the numbers is time unwatched.
         self.odom_seq += 1
         if bus.wants("odom"):
             cov = [0.0] * 36
             bus.publish("odom", {
                 "header": messages.header("odom", time.time(), self.odom_seq), "child_frame_id": "base_link",
-                "pose": {"pose": pose(b.odom_x, b.odom_y, b.odom_yaw), "covariance": cov},
+                "pose": {"pose": world.pose(b.odom_x, b.odom_y, b.odom_yaw), "covariance": cov},
                 "twist": {"twist": {"linear": {"x": b.v, "y": 0.0, "z": 0.0},
                                     "angular": {"x": 0.0, "y": 0.0, "z": b.w}}, "covariance": cov},
             })
@@ -117,8 +116,8 @@ class BaseNode(SimNode):
     def _pub_tf(self) -> None:
         b = self.body
         self.bus.publish("tf", {"transforms": [
-            transform("map", "odom", *b.map_from_odom()),
-            transform("odom", "base_link", b.odom_x, b.odom_y, b.odom_yaw),
+            world.transform("map", "odom", *b.map_from_odom()),
+            world.transform("odom", "base_link", b.odom_x, b.odom_y, b.odom_yaw),
         ]})
 
     def sonar(self) -> list[tuple[float, float]]:

@@ -1,4 +1,5 @@
-"""cyborg_controller, cyborg_behavior and cyborg_eventscheduler: the SMACH state machine and what each state does.
+"""cyborg_controller, cyborg_behavior and cyborg_eventscheduler: the SMACH state machine and what each state does;
+cyborg_commander: a robot mode run as its sequence of events, pauses and emotion-system switches.
 
 The state machine follows ROBOT_INTERFACE.md, "The state machine". States are tracked as leaf
 names; the behaviour container and, inside it, the navigation container are flattened into their
@@ -9,11 +10,14 @@ emotional feedback), arms its timer, or sends the robot somewhere through the na
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import random
 from collections.abc import Callable
 from typing import Any
+
+from robot import interface as ri
 
 from .. import messages
 from ..actions import SUCCEEDED, Goal
@@ -213,7 +217,7 @@ class ControllerNode(SimNode):
             if "clip" in preset:
                 self.av.audio.play(preset["clip"])
             if "pad" in preset:
-                self.emotion.emotions.feedback(*preset["pad"])
+                self.emotion.feedback(*preset["pad"])
         if new in self.durations:
             self._state_deadline = now + self.durations[new]
         elif new in NAVIGATION_LEAVES:  # the leaves that go somewhere (planning is timed)
@@ -257,3 +261,40 @@ class ControllerNode(SimNode):
                 "header": messages.header(), "path": path, "children": children,
                 "internal_outcomes": [e for _, e, _ in edges], "outcomes_from": [f for f, _, _ in edges],
                 "outcomes_to": [t for _, _, t in edges], "container_outcomes": outcomes})
+
+
+COMMANDER = "/cyborg_commander"
+
+
+class CommanderNode(SimNode):
+    names = (COMMANDER,)
+    publishes = ()  # it announces on the controller's own topics (register_event, emotional_controller)
+
+    def __init__(self, pause_s: float) -> None:
+        self.pause_s = pause_s
+        self.mode = ""  # the last robot_mode it ran
+        self._queue: asyncio.Queue[str] = asyncio.Queue()
+
+    def start(self, bus: Bus) -> None:
+        super().start(bus)
+        bus.on("robot_mode", lambda m: self._queue.put_nowait(m["data"]))
+        bus.spawn(self._run())
+
+    async def _run(self) -> None:
+        while True:
+            name = await self._queue.get()
+            try:
+                mode = ri.Mode(name)
+            except ValueError:
+                self.bus.rosout(4, COMMANDER, f"Unknown robot mode '{name}'")
+                continue
+            self.mode = mode.value
+            self.bus.rosout(2, COMMANDER, f"Robot mode: {mode.value}")
+            for kind, value in ri.COMMANDER_SEQUENCES[mode]:
+                if kind == "pause":
+                    await self.bus.clock.sleep(self.pause_s)  # every pause in the sequences is this one
+                elif kind == "event":
+                    self.bus.announce("register_event", {"data": str(value)})
+                elif kind == "emotion_system":
+                    on = ri.EMOTION_SYSTEM_ON if value else ri.EMOTION_SYSTEM_OFF
+                    self.bus.announce("emotional_controller", {"data": on})

@@ -23,8 +23,7 @@ from robot import interface as ri
 
 from .. import messages
 from ..bus import Bus, SimNode
-from ..world import OCCUPIED, UNKNOWN, Base, WorldMap
-from .shapes import grid, pose
+from ..world import OCCUPIED, UNKNOWN, Base, WorldMap, grid, pose
 
 INSCRIBED_RADIUS = 0.25  # m: half the Pioneer LX's width
 INFLATION_RADIUS = 0.55  # m

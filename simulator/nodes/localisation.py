@@ -10,14 +10,12 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass, field
 
 from robot import interface as ri
 
 from .. import messages
 from ..bus import Bus, SimNode
-from ..world import Base
-from .shapes import pose
+from ..world import Base, pose
 
 # amcl's defaults: initial_cov_xx/yy 0.5 * 0.5 m^2, initial_cov_aa (pi/12)^2 rad^2.
 INITIAL_SPREAD = (0.5, math.pi / 12)
@@ -27,16 +25,25 @@ TIGHTEN_S = 1.2  # time constant while the robot moves
 TIGHTEN_IDLE_S = 4.0  # and while it stands (scans still come in)
 
 
-@dataclass
-class ParticleCloud:
-    rng: random.Random
-    count: int = 300
-    spread_xy: float = START_SPREAD[0]
-    spread_yaw: float = START_SPREAD[1]
-    offsets: list[tuple[float, float, float]] = field(default_factory=list)
+class LocalisationNode(SimNode):
+    """amcl's particle cloud, published as AMCL does after each filter update."""
 
-    def __post_init__(self) -> None:
+    names: tuple[str, ...] = ()  # the navigation node names /amcl
+    publishes = ("particlecloud",)
+
+    def __init__(self, body: Base, rng: random.Random, rate_hz: float = 2.0, count: int = 300) -> None:
+        self.body = body
+        self.rng = rng
+        self.rate_hz = rate_hz
+        self.count = count
+        self.spread_xy, self.spread_yaw = START_SPREAD
         self._draw()
+
+    def start(self, bus: Bus) -> None:
+        super().start(bus)
+        bus.on("initialpose", lambda m: self.initial_pose())
+        bus.each_tick(lambda now, dt: self.step(dt, moving=self.body.v != 0.0 or self.body.w != 0.0))
+        bus.every(1.0 / self.rate_hz, self._publish, wanted="particlecloud")
 
     def _draw(self) -> None:
         g = self.rng.gauss
@@ -52,29 +59,7 @@ class ParticleCloud:
         self.spread_xy = MIN_SPREAD[0] + (self.spread_xy - MIN_SPREAD[0]) * k
         self.spread_yaw = MIN_SPREAD[1] + (self.spread_yaw - MIN_SPREAD[1]) * k
 
-    def poses(self, x: float, y: float, yaw: float) -> list[tuple[float, float, float]]:
-        s, a = self.spread_xy, self.spread_yaw
-        return [(x + s * dx, y + s * dy, yaw + a * da) for dx, dy, da in self.offsets]
-
-
-class LocalisationNode(SimNode):
-    """amcl's particle cloud, published as AMCL does after each filter update."""
-
-    names: tuple[str, ...] = ()  # the navigation node names /amcl
-    publishes = ("particlecloud",)
-
-    def __init__(self, body: Base, rng: random.Random, rate_hz: float = 2.0) -> None:
-        self.body = body
-        self.cloud = ParticleCloud(rng)
-        self.rate_hz = rate_hz
-
-    def start(self, bus: Bus) -> None:
-        super().start(bus)
-        bus.on("initialpose", lambda m: self.cloud.initial_pose())
-        bus.each_tick(lambda now, dt: self.cloud.step(dt, moving=self.body.v != 0.0 or self.body.w != 0.0))
-        bus.every(1.0 / self.rate_hz, self._publish, wanted="particlecloud")
-
     def _publish(self) -> None:
-        b = self.body
-        poses = [pose(x, y, yaw) for x, y, yaw in self.cloud.poses(b.x, b.y, b.yaw)]
+        b, s, a = self.body, self.spread_xy, self.spread_yaw
+        poses = [pose(b.x + s * dx, b.y + s * dy, b.yaw + a * da) for dx, dy, da in self.offsets]
         self.bus.publish("particlecloud", self.bus.dialect.particles(messages.header(ri.MAP_FRAME), poses))

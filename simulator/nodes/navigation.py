@@ -18,8 +18,7 @@ from robot import interface as ri
 from .. import messages, world
 from ..actions import ABORTED, ACTIVE, PREEMPTED, SUCCEEDED, ActionServer, Goal, Ros2Action
 from ..bus import Bus, SimNode
-from ..world import Base, wrap
-from .shapes import body_pose, grid, pose
+from ..world import Base, body_pose, grid, pose, wrap
 
 NAV_NODE = "/cyborg_navigation"
 
