@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import messages
-from .dialect import ROS1, Dialect
+from .messages import ROS1, Dialect
 
 log = logging.getLogger("simulator.rosbridge")
 

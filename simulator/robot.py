@@ -22,7 +22,7 @@ from robot import interface as ri
 from . import messages
 from .bus import Bus, Clock, SimNode
 from .camera import VideoServer
-from .dialect import DIALECTS
+from .messages import DIALECTS
 from .nodes.audiovisual import AudioVisualNode, Microphone, Speaker
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
