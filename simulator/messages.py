@@ -130,8 +130,9 @@ for _store in STORES.values():
     _store.register({n: d for k, v in _DEFS.items() for n, d in get_types_from_msg(v.replace(";", "\n"),
                                                                                    store_name(k)).items()
                      if n not in _store.fielddefs})
-# ROS 2's own types (rcl_interfaces/Log, action_msgs, ...) are known to the schemas of either dialect.
-STORES[ri.ROS1].register({n: d for n, d in STORES[ri.ROS2].fielddefs.items() if n not in STORES[ri.ROS1].fielddefs})
+# The ROS 2 types the simulator speaks (its log, its actions' status and cancel) are in the schemas of either dialect.
+_ROS2_PACKAGES = ("rcl_interfaces/", "action_msgs/", "unique_identifier_msgs/")
+STORES[ri.ROS1].register({n: d for n, d in STORES[ri.ROS2].fielddefs.items() if n.startswith(_ROS2_PACKAGES)})
 _TIMES = {"builtin_interfaces/msg/Time": "time", "builtin_interfaces/msg/Duration": "duration"}
 _PLACEHOLDER = "structure_needs_at_least_one_member"  # rosbags' field of an empty message
 

@@ -30,7 +30,7 @@ from .nodes.controller import CommanderNode, ControllerNode, StateMachine
 from .nodes.costmaps import CostmapNode
 from .nodes.diagnostics import DiagnosticsNode
 from .nodes.emotion import EmotionNode
-from .nodes.laser import LaserNode
+from .nodes.laser import Laser
 from .nodes.localisation import LocalisationNode
 from .nodes.navigation import NavigationNode
 from .protocol import Broker
@@ -94,7 +94,7 @@ class SimRobot:
                                            battery_drain_per_s, battery_charge_per_s))
         self.nav_node = self.add(NavigationNode(self.base, self.world, self.rng, nav_speed, ros))
         self.add(LocalisationNode(self.base, self.rng))
-        self.add(LaserNode(self.base, self.world))
+        self.add(Laser(self.world, self.base))
         self.add(CostmapNode(self.base, self.world, lambda: self.nav_node.navigator.active))
         self.emotion_node = self.add(EmotionNode(self.rng))
         self.av_node = self.add(AudioVisualNode(tts_s_per_char, tts_min_s, clip_s, mic_tone_hz, mic_coding))

@@ -11,7 +11,7 @@ range is where it first enters an occupied cell; beams that see nothing in range
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
@@ -27,29 +27,41 @@ MOUNT = (0.2, 0.0, 0.0)  # x, y, yaw of the laser on base_link (the /tf_static t
 
 
 @dataclass
-class Laser:
+class Laser(SimNode):
+    """The laser (``body``: the base it sits on) publishes a scan at ``rate_hz`` while anyone subscribes."""
+
     world: WorldMap
+    body: Base | None = None
+    rate_hz: float = 10.0
     beams: int = 541
     angle_min: float = -0.75 * math.pi
     angle_max: float = 0.75 * math.pi
     range_min: float = 0.05
     range_max: float = 10.0
     mount: tuple[float, float, float] = MOUNT
-    _angles: np.ndarray = field(init=False, repr=False)
-    _occupied: np.ndarray = field(init=False, repr=False)
-    _clearance: np.ndarray = field(init=False, repr=False)
-    _block: int = field(init=False, repr=False)
+    publishes = ("scan",)  # RosAria publishes it (the base node names /RosAria)
 
-    def __post_init__(self) -> None:
-        self._angles = self.angle_min + self.angle_increment * np.arange(self.beams)
-        self._occupied = self.world.grid >= OCCUPIED
-        # Metres from each block's centre to the nearest occupied block's centre, less twice a
-        # block's half diagonal (from anywhere in one block to anywhere in the other): never more
-        # than the way is clear. Blocks of f x f cells keep a large map quick.
-        f = self._block = max(1, math.ceil(math.sqrt(self._occupied.size / 250_000)))
+    def start(self, bus: Bus) -> None:
+        super().start(bus)
+        bus.every(1.0 / self.rate_hz, self._publish, wanted="scan")
+
+    def _publish(self) -> None:
+        assert self.body is not None
+        b = self.body
+        self.bus.publish("scan", self.message(b.x, b.y, b.yaw, scan_time=1.0 / self.rate_hz))
+
+    @cached_property
+    def _tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """Built on first use, as the distance map costs a moment: the beams' angles, the occupied
+        cells, and per block of f x f cells the metres from its centre to the nearest occupied block's
+        centre, less twice a block's half diagonal (from anywhere in one block to anywhere in the
+        other): never more than the way is clear. Blocks keep a large map quick."""
+        occupied = self.world.grid >= OCCUPIED
+        f = max(1, math.ceil(math.sqrt(occupied.size / 250_000)))
         blocks = (self.world.blocks(f, FREE) >= OCCUPIED).any(axis=(1, 3))
         size = f * self.world.resolution
-        self._clearance = (distance_transform_edt(~blocks) * size - size * 1.5).astype(np.float32)
+        clearance = (distance_transform_edt(~blocks) * size - size * 1.5).astype(np.float32)
+        return self.angle_min + self.angle_increment * np.arange(self.beams), occupied, clearance, f
 
     @property
     def angle_increment(self) -> float:
@@ -65,8 +77,9 @@ class Laser:
         """Ranges (m, NaN for no return) of every beam for a base at (x, y, yaw) on the map."""
         w = self.world
         res = w.resolution
+        beam_angles, occupied, clearance_map, block = self._tables
         lx, ly, lyaw = self.pose_on(x, y, yaw)
-        angles = lyaw + self._angles
+        angles = lyaw + beam_angles
         dx, dy = np.cos(angles), np.sin(angles)
         with np.errstate(divide="ignore"):
             inv_x, inv_y = np.where(dx != 0, 1 / dx, np.inf), np.where(dy != 0, 1 / dy, np.inf)
@@ -81,11 +94,11 @@ class Laser:
             cols, rows = np.floor(px / res).astype(np.int64), np.floor(py / res).astype(np.int64)
             inside = (rows >= 0) & (rows < w.height) & (cols >= 0) & (cols < w.width) & (d <= self.range_max)
             rows, cols = np.where(inside, rows, 0), np.where(inside, cols, 0)
-            hit = inside & self._occupied[rows, cols]
+            hit = inside & occupied[rows, cols]
             out[active[hit]] = np.maximum(d[hit], self.range_min)  # d is where the beam entered this cell
             # Far from obstacles, leap by the clearance; near them, step into the next cell the beam
             # crosses (a grid traversal), so no corner is ever skipped.
-            clearance = self._clearance[rows // self._block, cols // self._block]
+            clearance = clearance_map[rows // block, cols // block]
             ix, iy = inv_x[active], inv_y[active]
             to_x = ((cols + (ix > 0)) * res - px) * ix
             to_y = ((rows + (iy > 0)) * res - py) * iy
@@ -103,28 +116,3 @@ class Laser:
             "ranges": [None if math.isnan(r) else round(float(r), 3) for r in ranges],
             "intensities": [],
         }
-
-
-class LaserNode(SimNode):
-    """RosAria's laser topic: a scan at ``rate_hz`` while anyone subscribes."""
-
-    names: tuple[str, ...] = ()  # RosAria publishes it (the base node names /RosAria)
-    publishes = ("scan",)
-
-    def __init__(self, body: Base, world_map: WorldMap, rate_hz: float = 10.0) -> None:
-        self.body = body
-        self.world = world_map
-        self.rate_hz = rate_hz
-
-    def start(self, bus: Bus) -> None:
-        super().start(bus)
-        bus.every(1.0 / self.rate_hz, self._publish, wanted="scan")
-
-    @cached_property
-    def laser(self) -> Laser:
-        """Built on first use: the distance map costs a moment."""
-        return Laser(self.world)
-
-    def _publish(self) -> None:
-        b = self.body
-        self.bus.publish("scan", self.laser.message(b.x, b.y, b.yaw, scan_time=1.0 / self.rate_hz))
