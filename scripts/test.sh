@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole suite: lint and types, then the tests on two wirings, spread over parallel workers:
 #   embedded  SQLite + a private Valkey server per process: every test;
-#   services  PostgreSQL + Redis: the tests that depend on that wiring (tests/wiring.py says which).
+#   services  PostgreSQL + Redis: the tests marked as depending on the engine or on a shared Redis
+#             (tests/wiring.py says which).
 # The browser tests run on two workers (two groups: one stack and Chromium each). Ends with line and
 # branch coverage of all runs together and the time each part took. Arguments go to every pytest run (scripts/test.sh tests/teleop -x).
 # TEST_WORKERS sets the workers of the non-browser runs; TEST_LINT=0 and TEST_COVERAGE=0 skip those.

@@ -14,7 +14,8 @@ from robot.commands import audit_writer
 from robot.commands.audit_writer import AuditWriter
 from robot.models import AuditEntry
 
-pytestmark = pytest.mark.django_db(transaction=True)
+# The audit writer's own long-lived connection.
+pytestmark = [pytest.mark.postgres, pytest.mark.django_db(transaction=True)]
 
 
 def fields(action: str) -> dict:

@@ -3,11 +3,7 @@ steps of a stop are not written over a release (or a newer press) that came mean
 
 from __future__ import annotations
 
-import pytest
-
 from robot.estop.latch import aengage, alatch, arecord_steps, arelease
-
-pytestmark = pytest.mark.wiring  # the latest-state store, in memory or Redis
 
 
 async def test_a_second_press_keeps_the_first_press():

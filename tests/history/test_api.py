@@ -8,6 +8,8 @@ import pytest
 from history.models import Mode, RecordingSettings, TopicPolicy
 from history.storage import write_rows
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 TOPIC = "/history_test/api"
 
 

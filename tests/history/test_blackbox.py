@@ -26,6 +26,8 @@ from robot.live.latchstate import Latch
 from robot.supervisor import running
 from tests.helpers import async_wait_until
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 JPEG = b"\xff\xd8\xff\xe0fake-jpeg\xff\xd9"
 
 

@@ -11,6 +11,8 @@ from history.policies import load_policies, policy_upsert
 from history.recorder import Recorder
 from robot.live.state import get_store
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 PERIODIC = "/history_test/catchup"
 TYPE = "std_msgs/Float32"
 

@@ -2,6 +2,7 @@
 
 import time
 
+import pytest
 from django.conf import settings
 from django.db import OperationalError
 
@@ -9,6 +10,8 @@ from history.models import Mode, Sample
 from history.policies import policy_upsert
 from history.storage import utc, write_rows
 from tests.helpers import wait_until
+
+pytestmark = pytest.mark.postgres  # the history store, written by a real worker
 
 PERIODIC = "/history_test/celery_periodic"
 

@@ -10,6 +10,8 @@ from history.models import Rollup, Sample
 from history.rollup import MAX_LEAVES, aggregate
 from history.storage import utc, write_rows
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 TOPIC = "/bench/downsample"
 # "data" is rolled up at write time; "wide.0" sits in a 12-item array, which the rollups leave
 # out, so it is always read from the JSON.

@@ -10,6 +10,8 @@ from history.sessions import SESSION_TOPIC, SESSION_TYPE, SessionNotes
 from history.storage import utc, write_rows
 from robot import interface as ri
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 
 def _client(user) -> Client:
     client = Client()

@@ -6,6 +6,8 @@ from history.models import Mode, RecordingSettings, Sample, TopicPolicy
 from history.policies import default_interval_set, load_policies, policies_add_discovered, policy_upsert
 from history.recorder import Recorder
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 TOPIC = "/history_test/periodic"
 
 

@@ -10,7 +10,8 @@ from django.test import Client
 from history.models import Mode, TopicPolicy
 from robot.models import AuditEntry
 
-pytestmark = pytest.mark.django_db
+# The history store: its writes, queries and rollups differ by engine.
+pytestmark = [pytest.mark.postgres, pytest.mark.django_db]
 MIC = "/audio/audio"
 
 

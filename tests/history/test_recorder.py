@@ -15,7 +15,8 @@ from tests.helpers import async_wait_until
 
 from .conftest import BURST_TOPIC, BURST_TYPE
 
-pytestmark = pytest.mark.django_db(transaction=True)
+# The history store: its writes, queries and rollups differ by engine.
+pytestmark = [pytest.mark.postgres, pytest.mark.django_db(transaction=True)]
 
 count = sync_to_async(lambda topic: Sample.objects.filter(topic=topic).count())
 

@@ -20,6 +20,8 @@ from history.storage import write_rows
 from robot import interface as ri
 from robot.models import AuditEntry
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 T0 = 1_780_000_000.0
 MAP = {"info": {"width": 4, "height": 3, "resolution": 0.5,
                 "origin": {"position": {"x": -1.0, "y": -1.0, "z": 0},

@@ -9,6 +9,8 @@ from history.policies import policy_upsert
 from history.retention import prune_expired
 from history.storage import utc, write_rows
 
+pytestmark = pytest.mark.postgres  # the history store: its writes, queries and rollups differ by engine
+
 
 def _write(topic: str, values: list[tuple[float, float]]) -> None:
     write_rows([(topic, "std_msgs/Float32", t, f'{{"data": {v}, "wide": {[v] * 12}}}') for t, v in values])

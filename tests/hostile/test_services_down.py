@@ -9,7 +9,7 @@ from django.db import OperationalError
 
 from tests.hostile.support import PrivateRedis
 
-pytestmark = pytest.mark.django_db
+pytestmark = [pytest.mark.postgres, pytest.mark.django_db]  # the database going down
 
 
 @pytest.fixture

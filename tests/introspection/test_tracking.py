@@ -6,8 +6,6 @@ from __future__ import annotations
 import asyncio
 import time
 
-import pytest
-
 from robot import interface as ri
 from robot.introspection.tracking import track_diagnostics, track_smach
 from robot.live.groups import DIAGNOSTICS_KEY, SMACH_ACTIVE_KEY, SMACH_GRAPH_KEY
@@ -103,7 +101,6 @@ def _container(path: str, children: list[str]) -> dict:
             "outcomes_to": [], "container_outcomes": []}
 
 
-@pytest.mark.wiring
 async def test_a_grown_graph_re_tells_the_active_state_with_its_version():
     link = _Listeners()
     task = asyncio.ensure_future(track_smach(link))  # type: ignore[arg-type]

@@ -11,8 +11,6 @@ from robot.link.dialect import GOAL_STATUS_FROM_ROS2, goal_id_from_uuid, to_mode
 from tests.conftest import hosted_link
 from tests.helpers import async_wait_until
 
-pytestmark = pytest.mark.wiring
-
 
 @pytest.fixture(params=[ri.ROS1, ri.ROS2], ids=["ros1", "ros2"])
 def ros(request):

@@ -14,7 +14,7 @@ from tests.helpers import async_wait_until
 from tests.stack import free_port
 from uplink_agent import mux
 
-pytestmark = [pytest.mark.wiring, pytest.mark.django_db(transaction=True)]
+pytestmark = pytest.mark.django_db(transaction=True)
 
 
 @pytest.fixture

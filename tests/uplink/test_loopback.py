@@ -15,7 +15,7 @@ from tests.helpers import async_wait_until
 from tests.stack import free_port
 from tests.uplink.relay import LatencyRelay
 
-pytestmark = [pytest.mark.wiring, pytest.mark.django_db(transaction=True)]
+pytestmark = pytest.mark.django_db(transaction=True)
 
 
 async def _link():
