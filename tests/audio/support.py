@@ -9,7 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from simulator.nodes.audiovisual import tone
-from tests.helpers import ws_communicator
+from tests.helpers import DEADLINE_S, ws_communicator
 
 TALK = {"type": "talk", "on": True, "format": "S16LE", "rate": 16000, "channels": 1}
 CHUNK = 320  # samples: 20 ms at 16 kHz
@@ -23,7 +23,7 @@ class Frames:
         self.texts: list[dict[str, Any]] = []
         self.chunks: list[bytes] = []
 
-    async def read(self, timeout: float = 5.0) -> None:
+    async def read(self, timeout: float = DEADLINE_S) -> None:
         message = await self.ws.receive_output(timeout)
         if message["type"] == "websocket.close":
             raise AssertionError(f"socket closed: {message}")
@@ -32,7 +32,7 @@ class Frames:
         else:
             self.texts.append(json.loads(message["text"]))
 
-    async def text(self, match: Callable[[dict[str, Any]], bool], timeout: float = 5.0) -> dict[str, Any]:
+    async def text(self, match: Callable[[dict[str, Any]], bool], timeout: float = DEADLINE_S) -> dict[str, Any]:
         """The first text frame (seen before or arriving within ``timeout``) that matches; consumed."""
         deadline = time.monotonic() + timeout
         while True:
@@ -44,7 +44,7 @@ class Frames:
                 raise AssertionError(f"no matching frame; got {self.texts[-5:]}")
             await self.read(left)
 
-    async def chunk_count(self, count: int, timeout: float = 5.0) -> None:
+    async def chunk_count(self, count: int, timeout: float = DEADLINE_S) -> None:
         deadline = time.monotonic() + timeout
         while len(self.chunks) < count:
             left = deadline - time.monotonic()

@@ -12,7 +12,7 @@ from asgiref.sync import async_to_sync
 from robot import interface as ri
 from robot.commands.statewatch import StateWatch
 from robot.models import AuditEntry
-from tests.helpers import wait_until
+from tests.helpers import DEADLINE_S, wait_until
 
 # Every topic a command may publish on.
 COMMAND_TOPICS = ("robot_mode", "register_event", "emotional_controller", "set_emotional_state",
@@ -78,7 +78,7 @@ def last_audit() -> AuditEntry:
     return entry
 
 
-async def until_the_server_hears(accept: Callable[[str], bool], what: str, timeout: float = 5.0) -> str:
+async def until_the_server_hears(accept: Callable[[str], bool], what: str, timeout: float = DEADLINE_S) -> str:
     """Wait for the link to report a state ``accept`` takes (the state the server plans from)."""
     deadline = time.monotonic() + timeout
     while not accept(state := await StateWatch().start()):

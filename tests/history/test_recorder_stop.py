@@ -6,6 +6,7 @@ import asyncio
 import types
 
 from history.recorder import Recorder
+from tests.helpers import DEADLINE_S
 
 
 async def test_a_recorder_cancelled_mid_write_ends_and_flushes():
@@ -29,6 +30,6 @@ async def test_a_recorder_cancelled_mid_write_ends_and_flushes():
     await asyncio.wait_for(writing.wait(), 2)
     flushed_before = len(flushes)
     running.cancel()
-    done, _ = await asyncio.wait({running}, timeout=1)
+    done, _ = await asyncio.wait({running}, timeout=DEADLINE_S)
     assert done, "the recorder went on recording, its stop lost: the link's stop gave up on it unflushed"
     assert len(flushes) > flushed_before, "no final flush"

@@ -11,7 +11,7 @@ import redis
 
 from robot import interface as ri
 from robot.link.lease import Lease
-from tests.helpers import async_wait_until
+from tests.helpers import DEADLINE_S, async_wait_until
 from tests.support_processes import PrivateRedis
 
 KEY = "test:link-lease"
@@ -41,12 +41,12 @@ async def leases(redis_server):
 async def _take_over(redis_server: PrivateRedis, lease: Lease) -> None:
     """The key expires (the holder stalled) and ``lease`` takes it."""
     redis.Redis.from_url(redis_server.url).delete(KEY)
-    await asyncio.wait_for(lease.acquire(), 5)
+    await asyncio.wait_for(lease.acquire(), DEADLINE_S)
 
 
 async def test_one_holder_at_a_time_and_a_release_hands_over_at_once(leases, redis_server):
     a, b = leases("link-a"), leases("link-b")
-    await asyncio.wait_for(a.acquire(), 5)
+    await asyncio.wait_for(a.acquire(), DEADLINE_S)
     renewing = asyncio.ensure_future(a.hold())
     waiting = asyncio.ensure_future(b.acquire())
     await asyncio.sleep(1.5 * TTL_S)  # the holder renews: the standby never gets it
@@ -54,17 +54,17 @@ async def test_one_holder_at_a_time_and_a_release_hands_over_at_once(leases, red
 
     await a.release()
     assert redis.Redis.from_url(redis_server.url).get(KEY) in (None, b.token)  # given up, not left to expire
-    await asyncio.wait_for(renewing, 5)
+    await asyncio.wait_for(renewing, DEADLINE_S)
     assert not a.held and not await a.check()
     # Handed over at the standby's next poll, not left to expire. (A standby that began waiting while
     # the server was younger than a lease first waits a lease's time: the deadline leaves room for it.)
-    await asyncio.wait_for(waiting, 10)
+    await asyncio.wait_for(waiting, DEADLINE_S)
     assert b.held and await b.check()
 
 
 async def test_a_holder_whose_lease_was_taken_knows_at_its_next_check(leases, redis_server):
     a, b = leases("link-a"), leases("link-b")
-    await asyncio.wait_for(a.acquire(), 5)
+    await asyncio.wait_for(a.acquire(), DEADLINE_S)
     await _take_over(redis_server, b)
 
     assert not await a.check()
@@ -74,7 +74,7 @@ async def test_a_holder_whose_lease_was_taken_knows_at_its_next_check(leases, re
 
 async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, leases, redis_server):
     a, b = leases("link-a"), leases("link-b")
-    await asyncio.wait_for(a.acquire(), 5)
+    await asyncio.wait_for(a.acquire(), DEADLINE_S)
     renewing = asyncio.ensure_future(a.hold())
     link.lease = a
     speech = ri.topic("text_to_speech")
@@ -90,7 +90,7 @@ async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, le
     await asyncio.sleep(0.5)
     assert {"data": "after losing it"} not in sim.received(speech.name)
     link.lease = None
-    await asyncio.wait_for(renewing, 5)  # the renewal finds the other token and gives up too
+    await asyncio.wait_for(renewing, DEADLINE_S)  # the renewal finds the other token and gives up too
 
 
 async def test_after_redis_restarts_empty_the_holder_takes_its_lease_back(leases, redis_server):
@@ -115,7 +115,7 @@ async def test_after_redis_restarts_empty_the_holder_takes_its_lease_back(leases
 
 async def test_while_redis_is_out_of_reach_the_holder_may_only_stop_the_robot_then_holds_again(leases, redis_server):
     a, b = leases("link-a"), leases("link-b")
-    await asyncio.wait_for(a.acquire(), 5)
+    await asyncio.wait_for(a.acquire(), DEADLINE_S)
     renewing = asyncio.ensure_future(a.hold())
     waiting = asyncio.ensure_future(b.acquire())
 
@@ -135,7 +135,7 @@ async def test_while_redis_is_out_of_reach_the_holder_may_only_stop_the_robot_th
 
 async def test_a_holder_that_finds_its_key_taken_when_redis_returns_gives_up(leases, redis_server):
     a = leases("link-a")
-    await asyncio.wait_for(a.acquire(), 5)
+    await asyncio.wait_for(a.acquire(), DEADLINE_S)
     renewing = asyncio.ensure_future(a.hold())
     redis_server.stop()
     await asyncio.sleep(TTL_S * 1.5)
@@ -156,5 +156,5 @@ async def test_a_renewing_holder_ends_when_cancelled_mid_renewal(leases):
         holding = asyncio.ensure_future(lease.hold())
         await asyncio.sleep(random.random() * 0.005)
         holding.cancel()
-        done, _ = await asyncio.wait({holding}, timeout=2)
+        done, _ = await asyncio.wait({holding}, timeout=DEADLINE_S)
         assert done and holding.cancelled(), "the holder renewed on, its stop lost"

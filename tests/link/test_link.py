@@ -212,7 +212,7 @@ async def test_a_message_read_on_another_thread_is_handled_on_the_loop(link):
     reader = threading.Thread(target=link._received, args=("/not_in_the_registry", "std_msgs/String", {}))
     reader.start()
     reader.join()
-    await async_wait_until(lambda: ("/not_in_the_registry", threading.get_ident()) in seen, timeout=2)
+    await async_wait_until(lambda: ("/not_in_the_registry", threading.get_ident()) in seen)
     assert [ident for name, ident in seen if name == "/not_in_the_registry"] == [threading.get_ident()]
 
 

@@ -1,6 +1,7 @@
 import asyncio
 
 from robot.live.fanout import BURST, Coalescer
+from tests.helpers import DEADLINE_S
 
 
 async def test_it_forwards_the_latest_value_at_the_ui_rate():
@@ -123,5 +124,5 @@ async def test_closing_it_ends_its_sender_mid_send():
     coalescer.offer("pose", 10.0, 1)
     await asyncio.wait_for(sending.wait(), 1)
     coalescer.close()
-    done, _ = await asyncio.wait({coalescer._task}, timeout=1)
+    done, _ = await asyncio.wait({coalescer._task}, timeout=DEADLINE_S)
     assert done, "the sender went on"

@@ -39,7 +39,7 @@ async def test_a_socket_gets_one_frame_per_tick_with_only_the_newest_value_of_ea
         hub.publish("odom", fragment("odom", i, 100 + i), 100 + i)
     hub.publish("battery_soc", fragment("battery_soc", 0.5, 200), 200)
     hub.publish("plan", fragment("plan", 1, 201), 201)  # nobody watches it
-    await async_wait_until(lambda: recorder.frames, timeout=2)
+    await async_wait_until(lambda: recorder.frames)
     await asyncio.sleep(0.15)
     assert len(recorder.frames) == 1
     assert {u["key"]: u["msg"]["data"] for u in recorder.updates()} == {"odom": 19, "battery_soc": 0.5}
@@ -52,7 +52,7 @@ async def test_event_like_keys_keep_every_message_in_order_up_to_a_bound():
     hub.watch(socket, ["rosout"])
     for i in range(5):
         hub.publish("rosout", fragment("rosout", f"line {i}", 100 + i), 100 + i, every=True)
-    await async_wait_until(lambda: len(recorder.updates()) == 5, timeout=2)
+    await async_wait_until(lambda: len(recorder.updates()) == 5)
     assert [u["msg"]["data"] for u in recorder.updates()] == [f"line {i}" for i in range(5)]
 
     from robot.live.hub import MAX_PENDING
@@ -70,7 +70,7 @@ async def test_a_socket_that_left_gets_nothing_and_is_forgotten():
     hub.watch(gone, ["odom"])
     hub.detach(gone)
     hub.publish("odom", fragment("odom", 1, 1), 1)
-    await async_wait_until(lambda: stays.frames, timeout=2)
+    await async_wait_until(lambda: stays.frames)
     assert not leaves.frames
     assert hub.sockets == {kept} and hub._watchers == {"odom": {kept}}
 
@@ -185,7 +185,7 @@ async def test_sockets_with_the_same_updates_share_one_encoded_frame():
     hub.watch(sockets[2], ["battery_soc"])
     hub.publish("odom", fragment("odom", 1, 1), 1)
     hub.publish("battery_soc", fragment("battery_soc", 0.5, 2), 2)
-    await async_wait_until(lambda: all(w.frames for w in writers), timeout=2)
+    await async_wait_until(lambda: all(w.frames for w in writers))
     assert writers[0].frames[0] is writers[1].frames[0]  # encoded once for both
     assert [u["key"] for u in writers[2].updates()] == ["odom", "battery_soc"]
     assert [u["msg"]["data"] for u in writers[0].updates()] == [1]
@@ -199,10 +199,10 @@ async def test_a_socket_the_kernel_has_not_drained_gets_the_newest_value_later_a
         hub.watch(hub.attach(Recorder().send, writer), ["odom"])
     for i in range(5):
         hub.publish("odom", fragment("odom", i, i), i)
-        await async_wait_until(lambda i=i: fast.updates() and fast.updates()[-1]["msg"]["data"] == i, timeout=2)
+        await async_wait_until(lambda i=i: fast.updates() and fast.updates()[-1]["msg"]["data"] == i)
     assert not slow.frames
     slow.pending_bytes = 0
-    await async_wait_until(lambda: slow.frames, timeout=2)
+    await async_wait_until(lambda: slow.frames)
     assert [u["msg"]["data"] for u in slow.updates()] == [4]  # only the newest, once
 
 
@@ -213,7 +213,7 @@ async def test_a_closing_connection_is_not_written_to():
     for writer in (closing, open_):
         hub.watch(hub.attach(Recorder().send, writer), ["odom"])
     hub.publish("odom", fragment("odom", 1, 1), 1)
-    await async_wait_until(lambda: open_.frames, timeout=2)
+    await async_wait_until(lambda: open_.frames)
     await asyncio.sleep(0.1)
     assert not closing.frames and not hub._dirty
 
@@ -232,7 +232,7 @@ async def test_a_flood_of_updates_is_paced_to_about_one_frame_per_tick():
         i += 1
         await asyncio.sleep(0.002)
     elapsed = loop.time() - start
-    await async_wait_until(lambda: writer.updates() and writer.updates()[-1]["msg"]["data"] == i - 1, timeout=2)
+    await async_wait_until(lambda: writer.updates() and writer.updates()[-1]["msg"]["data"] == i - 1)
     # A burst of BURST frames, then one per tick however fast the updates come (a slow machine
     # only makes fewer frames); the newest value always arrives.
     assert len(writer.frames) <= BURST + elapsed / 0.05 + 2
@@ -264,7 +264,7 @@ async def test_an_update_that_arrives_while_the_loop_reads_joins_the_frame_of_th
         loop.call_soon(hub.publish, "odom", fragment("odom", 2, 2), 2)
 
     loop.call_soon(read_odom)
-    await async_wait_until(lambda: writer.frames, timeout=2)
+    await async_wait_until(lambda: writer.frames)
     await asyncio.sleep(0.05)
     assert len(writer.frames) == 1
     assert [u["key"] for u in writer.updates()] == ["robot_pose", "odom"]
@@ -277,7 +277,7 @@ async def test_updates_offered_in_one_loop_turn_share_one_frame():
     hub.publish("robot_pose", fragment("robot_pose", 1, 1), 1)
     hub.publish("odom", fragment("odom", 2, 2), 2)
     hub.publish("odom", fragment("odom", 3, 3), 3)
-    await async_wait_until(lambda: writer.frames, timeout=2)
+    await async_wait_until(lambda: writer.frames)
     await asyncio.sleep(0.05)
     assert len(writer.frames) == 1
     assert [(u["key"], u["msg"]["data"]) for u in writer.updates()] == [("robot_pose", 1), ("odom", 3)]
@@ -289,18 +289,18 @@ async def test_the_services_a_process_cannot_reach_ride_on_every_status_frame():
     hub.attach(recorder.send)
     link_status = frames.status_text({"connected": True, "link_running": True, "url": "ws://robot"})
     hub.publish_status(link_status)
-    await async_wait_until(lambda: recorder.frames, timeout=2)
+    await async_wait_until(lambda: recorder.frames)
     assert "services_down" not in recorder.frames[-1]
 
     hub.set_services({"redis": "Redis is unreachable"})
-    await async_wait_until(lambda: len(recorder.frames) == 2, timeout=2)
+    await async_wait_until(lambda: len(recorder.frames) == 2)
     assert recorder.frames[-1]["services_down"] == {"redis": "Redis is unreachable"}
     # The link's last word, with what this process sees.
     assert {k: v for k, v in recorder.frames[-1].items() if k != "services_down"} == json.loads(link_status)
     hub.set_services({"redis": "Redis is unreachable"})  # unchanged: no frame
     hub.publish_status(frames.status_text({"connected": False, "url": "ws://other"}))
-    await async_wait_until(lambda: len(recorder.frames) == 3, timeout=2)
+    await async_wait_until(lambda: len(recorder.frames) == 3)
     assert recorder.frames[-1]["services_down"] and recorder.frames[-1]["url"] == "ws://other"
     hub.set_services({})
-    await async_wait_until(lambda: len(recorder.frames) == 4, timeout=2)
+    await async_wait_until(lambda: len(recorder.frames) == 4)
     assert "services_down" not in recorder.frames[-1]

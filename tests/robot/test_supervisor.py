@@ -7,6 +7,7 @@ import itertools
 import logging
 
 from robot import supervisor
+from tests.helpers import DEADLINE_S
 
 
 async def test_it_logs_and_restarts_a_failing_task_and_reports_it(caplog):
@@ -71,7 +72,7 @@ async def test_a_cancelled_task_whose_clean_up_fails_stops_all_the_same():
     task = supervisor.supervise("test.failed-clean-up", reads_from_redis)
     await started.wait()
     task.cancel()
-    done, _ = await asyncio.wait({task}, timeout=3)
+    done, _ = await asyncio.wait({task}, timeout=DEADLINE_S)
     assert task in done and task.cancelled()
     assert supervisor.health()["test.failed-clean-up"]["state"] == "finished"
 
@@ -91,7 +92,7 @@ async def test_cancel_and_wait_waits_no_longer_than_told_and_names_what_still_ru
         await supervisor.cancel_and_wait([quick, slow], 0.1)
     assert quick.cancelled() and not slow.done(), "it waited for the slow one"
     assert "1 task(s) still running 0.1 s after being cancelled" in caplog.text and "test.slow-to-end" in caplog.text
-    await asyncio.wait({slow}, timeout=2)
+    await asyncio.wait({slow}, timeout=DEADLINE_S)
     assert slow.cancelled()
     supervisor.forget("test.slow-to-end")
 

@@ -13,7 +13,7 @@ from typing import Any
 import roslibpy
 from websockets.sync.client import ClientConnection, connect
 
-from tests.helpers import wait_until
+from tests.helpers import DEADLINE_S, wait_until
 
 # State timers short enough for a fast suite.
 FAST = dict(startup_s=0.3, demo_s=1.0, behaviour_s=0.4, tts_s_per_char=0.01, tts_min_s=0.1, clip_s=0.2,
@@ -34,7 +34,7 @@ class Inbox:
             self.times.append(time.time())
             self._cond.notify_all()
 
-    def wait(self, predicate: Callable[[list[Any]], Any] = bool, timeout: float = 5.0, what: str = "") -> Any:
+    def wait(self, predicate: Callable[[list[Any]], Any] = bool, timeout: float = DEADLINE_S, what: str = "") -> Any:
         deadline = time.monotonic() + timeout
         with self._cond:
             while True:
@@ -46,7 +46,7 @@ class Inbox:
                     raise AssertionError(f"timed out waiting for {what or predicate}; got {self.items[-5:]}")
                 self._cond.wait(left)
 
-    def wait_for(self, match: Callable[[Any], bool], timeout: float = 5.0, what: str = "") -> Any:
+    def wait_for(self, match: Callable[[Any], bool], timeout: float = DEADLINE_S, what: str = "") -> Any:
         return self.wait(lambda items: next((m for m in items if match(m)), None), timeout, what)
 
     def __len__(self) -> int:
@@ -83,7 +83,7 @@ class Raw:
     def send(self, frame: dict[str, Any] | str) -> None:
         self.ws.send(frame if isinstance(frame, str) else json.dumps(frame))
 
-    def expect(self, match: Callable[[dict[str, Any]], bool], timeout: float = 5.0) -> dict[str, Any]:
+    def expect(self, match: Callable[[dict[str, Any]], bool], timeout: float = DEADLINE_S) -> dict[str, Any]:
         deadline = time.monotonic() + timeout
         while True:
             left = deadline - time.monotonic()
@@ -108,7 +108,7 @@ class Raw:
                 out.append(frame)
         return out
 
-    def call(self, service: str, args: Any = None, cid: str = "c1", timeout: float = 5.0) -> dict[str, Any]:
+    def call(self, service: str, args: Any = None, cid: str = "c1", timeout: float = DEADLINE_S) -> dict[str, Any]:
         frame: dict[str, Any] = {"op": "call_service", "service": service, "id": cid}
         if args is not None:
             frame["args"] = args

@@ -116,7 +116,7 @@ def test_it_publishes_tf_at_a_high_rate_with_the_map_odom_base_link_chain(sim, r
 
 def test_it_publishes_action_status_even_when_idle(sim, ros):
     status = subscribe(ros, f"{ri.action('move_base').name}/status", "actionlib_msgs/GoalStatusArray")
-    status.wait(lambda items: len(items) >= 3, timeout=3)
+    status.wait(lambda items: len(items) >= 3)
     assert status.items[-1]["status_list"] == []
     action_client(ros, "navigation")  # raises unless a first /status arrives within 3 s
 
@@ -133,7 +133,7 @@ def test_it_drives_with_cmd_vel_and_stops_half_a_second_after_the_last_command(s
     assert 0.3 < travelled < 0.8
     # heading pi/2: forward is +y
     assert moving["pose"]["y"] > start["y"] + 0.3
-    wait_until(lambda: state(sim)["v"] == 0.0, timeout=1.5, what="base stopped")
+    wait_until(lambda: state(sim)["v"] == 0.0, what="base stopped")
     stopped = state(sim)["pose"]
     time.sleep(0.2)
     assert state(sim)["pose"] == stopped
@@ -268,9 +268,9 @@ def test_it_charges_when_docked_and_drains_faster_while_moving():
             assert moving_drop > 1.5 * idle_drop > 0
             dock = sim.robot.world.locations["charging_station"]
             set_pose(ros, sim, dock.x, dock.y, dock.yaw)
-            recharge.wait_for(lambda m: m["data"] > 0, timeout=3)
+            recharge.wait_for(lambda m: m["data"] > 0)
             level = state(sim)["battery"]["soc"]
-            wait_until(lambda: state(sim)["battery"]["soc"] > level + 0.02, timeout=3)
+            wait_until(lambda: state(sim)["battery"]["soc"] > level + 0.02)
             assert soc.items and 0.0 <= soc.items[-1]["data"] <= 1.0
         finally:
             ros.close()
@@ -393,7 +393,7 @@ def test_it_drifts_pad_only_while_the_emotion_system_is_on(sim, ros, switch):
     pub(ros, "emotional_controller", {"data": switch})
     wait_until(lambda: state(sim)["emotion_system"] is True)
     first = state(sim)["emotion"]["pad"]
-    wait_until(lambda: state(sim)["emotion"]["pad"] != first, timeout=2, what="drift")
+    wait_until(lambda: state(sim)["emotion"]["pad"] != first, what="drift")
     pub(ros, "emotional_controller", {"data": switch.replace("n", "ff").replace("N", "FF")})
     wait_until(lambda: state(sim)["emotion_system"] is False)
     frozen = state(sim)["emotion"]["pad"]

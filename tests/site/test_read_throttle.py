@@ -11,6 +11,7 @@ from django.test import override_settings
 
 from cyborg_site.bucket import Bucket
 from server.read_throttle import ReadThrottle, caller
+from tests.helpers import DEADLINE_S
 
 
 def test_a_bucket_gives_a_burst_then_paces_at_the_rate():
@@ -42,7 +43,7 @@ def _get(app, path: str = "/api/robot/state/", method: str = "GET", token: str =
 @override_settings(READ_THROTTLE_PER_S=2, READ_THROTTLE_BURST=1, READ_THROTTLE_WAIT_S=0.3)
 async def test_too_many_waiting_reads_get_429_and_nothing_else_is_held_up():
     app = ReadThrottle(_app)
-    answers = await asyncio.gather(*(_get(app).get_response(timeout=3) for _ in range(3)))
+    answers = await asyncio.gather(*(_get(app).get_response(timeout=DEADLINE_S) for _ in range(3)))
     # One from the burst, one paced 0.5 s later (over the 0.3 s wait: 429 after it), and the last as well.
     statuses = sorted(a["status"] for a in answers)
     assert statuses == [200, 429, 429], statuses
@@ -50,11 +51,11 @@ async def test_too_many_waiting_reads_get_429_and_nothing_else_is_held_up():
     assert b'"code": "throttled"' in refused["body"] and dict(refused["headers"])[b"retry-after"] == b"1"
     for other in (_get(app, method="POST"), _get(app, path="/static/css/site.css"), _get(app, token="b"),
                   _get(app, path="/healthz")):
-        assert (await other.get_response(timeout=0.2))["status"] == 200
+        assert (await other.get_response(timeout=DEADLINE_S))["status"] == 200
 
 
 @override_settings(READ_THROTTLE_PER_S=20, READ_THROTTLE_BURST=1, READ_THROTTLE_WAIT_S=1)
 async def test_a_caller_asking_one_at_a_time_is_paced_never_refused():
     app = ReadThrottle(_app)
     for _ in range(5):
-        assert (await _get(app).get_response(timeout=2))["status"] == 200
+        assert (await _get(app).get_response(timeout=DEADLINE_S))["status"] == 200

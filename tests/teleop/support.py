@@ -8,7 +8,7 @@ import time
 from typing import Any
 
 from robot import interface as ri
-from tests.helpers import async_wait_until, receive_until, ws_communicator
+from tests.helpers import DEADLINE_S, async_wait_until, receive_until, ws_communicator
 
 
 async def drive_socket(user) -> Any:
@@ -29,7 +29,9 @@ async def twists(sim) -> list[dict[str, Any]]:
     return await asyncio.to_thread(sim.received, ri.topic("cmd_vel").name)
 
 
-async def wait_twist(sim, predicate, *, after: int = 0, timeout: float = 5.0, what: str = "a Twist") -> dict[str, Any]:
+async def wait_twist(
+    sim, predicate, *, after: int = 0, timeout: float = DEADLINE_S, what: str = "a Twist"
+) -> dict[str, Any]:
     """The first Twist the simulator received (from index ``after`` on) that matches."""
     found: list[dict[str, Any]] = []
 

@@ -111,7 +111,7 @@ async def test_it_ends_the_active_teleop_session_and_frees_the_lock(link, sim, o
     await lock_frame(ws, lambda f: f["holder"] is None and not f["you"])
     assert await get_lock().holder() is None
     count = len(await twists(sim))
-    await wait_twist(sim, is_zero, after=count - 1, timeout=1)
+    await wait_twist(sim, is_zero, after=count - 1)
     await asyncio.sleep(0.3)
     assert all(is_zero(t) for t in (await twists(sim))[count - 1:])  # the driver's loop stopped
     await ws.disconnect()

@@ -8,7 +8,7 @@ import pytest
 from django.contrib.auth.models import AnonymousUser
 
 from robot.models import AuditEntry
-from tests.helpers import ws_communicator
+from tests.helpers import DEADLINE_S, ws_communicator
 from tests.teleop.support import (
     drive_socket,
     error_frame,
@@ -50,7 +50,7 @@ async def test_it_publishes_zero_at_once_on_release(link, sim, operator):
     await wait_twist(sim, is_moving)
     await ws.send_json_to({"type": "release"})
     seen = len(await twists(sim))
-    await wait_twist(sim, is_zero, timeout=1)
+    await wait_twist(sim, is_zero)
     await asyncio.sleep(0.3)  # the loop has stopped: nothing but the zero follows
     assert all(is_zero(t) for t in (await twists(sim))[seen - 1:][1:])
     await ws.disconnect()
@@ -61,7 +61,7 @@ async def test_it_publishes_zero_when_the_page_is_hidden(link, sim, operator):
     await ws.send_json_to(key(0.0, 1.0))
     await wait_twist(sim, is_moving)
     await ws.send_json_to({"type": "hidden"})
-    await wait_twist(sim, is_zero, timeout=1)
+    await wait_twist(sim, is_zero)
     await ws.disconnect()
 
 
@@ -70,7 +70,7 @@ async def test_it_publishes_zero_when_the_socket_disconnects(link, sim, operator
     await ws.send_json_to(key(1.0))
     await wait_twist(sim, is_moving)
     await ws.disconnect()
-    await wait_twist(sim, is_zero, timeout=1)
+    await wait_twist(sim, is_zero)
     assert await AuditEntry.objects.filter(action="teleop.unlock", params__reason="disconnect").aexists()
 
 
@@ -79,11 +79,11 @@ async def test_it_stops_the_robot_when_input_goes_silent(link, sim, operator, se
     ws = await drive_socket(operator)
     await ws.send_json_to(key(1.0))
     await wait_twist(sim, is_moving)
-    frame = await ws.receive_json_from(timeout=2)
+    frame = await ws.receive_json_from(timeout=DEADLINE_S)
     while frame.get("reason") != "deadman":
-        frame = await ws.receive_json_from(timeout=2)
+        frame = await ws.receive_json_from(timeout=DEADLINE_S)
     assert frame == {"type": "commanded", "linear": 0.0, "angular": 0.0, "reason": "deadman"}
-    await wait_twist(sim, is_zero, timeout=1)
+    await wait_twist(sim, is_zero)
     assert await AuditEntry.objects.filter(action="teleop.deadman").aexists()
     await ws.disconnect()
 
@@ -125,7 +125,7 @@ async def test_it_lets_an_admin_take_over_and_stops_the_previous_driver(link, si
     assert (await lock_frame(otto_ws, lambda f: f["holder"] == "ada"))["you"] is False
     await lock_frame(ada_ws, lambda f: f["you"])
     count = len(await twists(sim))
-    await wait_twist(sim, is_zero, after=count - 1, timeout=1)
+    await wait_twist(sim, is_zero, after=count - 1)
     await asyncio.sleep(0.3)
     assert all(is_zero(t) for t in (await twists(sim))[count:])  # otto's loop has stopped
     await otto_ws.send_json_to(key(1.0))
@@ -180,7 +180,7 @@ async def test_it_frees_the_lock_on_unlock_and_audits_it(link, sim, operator, vi
     await lock_frame(vera_ws, lambda f: f["holder"] == "otto")
     await otto_ws.send_json_to({"type": "unlock"})
     await lock_frame(vera_ws, lambda f: f["holder"] is None)
-    await wait_twist(sim, is_zero, timeout=1)
+    await wait_twist(sim, is_zero)
     actions = [a async for a in AuditEntry.objects.order_by("id").values_list("action", flat=True)]
     assert actions == ["teleop.lock", "teleop.unlock"]  # lock events, never a Twist
     await otto_ws.disconnect()
