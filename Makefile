@@ -16,7 +16,7 @@ STAMP := $(VENV)/.installed
 # suite starts (Daphne, links, the simulator, manage.py) compiles all it imports again, ~5 CPU s each.
 unexport PYTHONDONTWRITEBYTECODE
 
-.PHONY: run test test-quick test-repeat install browser nginx wrk stack stack-down lint bench clean
+.PHONY: run test test-quick test-repeat install browser nginx wrk stress-ng stack stack-down lint bench clean
 
 # Installs exactly what requirements/dev.lock pins, with hashes. Upgrading is on purpose:
 #   .venv/bin/uv pip compile pyproject.toml --extra dev --generate-hashes --python-version 3.12 \
@@ -50,6 +50,12 @@ wrk:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq wrk; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq wrk; fi; }
 
+# Debian's stress-ng: the CPU hog beside the suite in make test-repeat HOG=1.
+stress-ng:
+	@command -v stress-ng >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq stress-ng; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq stress-ng; fi; }
+
 # The production topology on this machine (see README, "Deploy").
 stack: install nginx
 	bash scripts/stack.sh up
@@ -79,10 +85,12 @@ test: install browser nginx $(FOXGLOVE)/node_modules/.installed
 test-quick: install $(FOXGLOVE)/node_modules/.installed
 	env -u REDIS_URL -u DATABASE_URL $(BIN)/python -m pytest --testmon --testmon-forceselect -m "not browser and not stack" -n 2 -q $(ARGS)
 
-# The suite N times (make test-repeat N=5): which tests ever failed, and how often.
+# The suite N times (make test-repeat N=5): which tests ever failed, and how often. HOG=1 keeps one
+# core busy beside every run (stress-ng --cpu 1), as a loaded machine would; ARGS go to every pytest run.
 N ?= 5
-test-repeat: install browser nginx $(FOXGLOVE)/node_modules/.installed
-	bash scripts/test_repeat.sh $(N)
+HOG ?= 0
+test-repeat: install browser nginx $(FOXGLOVE)/node_modules/.installed $(if $(filter 1,$(HOG)),stress-ng)
+	HOG=$(HOG) bash scripts/test_repeat.sh $(N) $(ARGS)
 
 lint: install
 	$(BIN)/ruff check .
