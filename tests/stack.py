@@ -8,6 +8,7 @@ given DATABASE_URL), free ports, and users per role.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import http.cookiejar
 import itertools
 import os
@@ -64,6 +65,12 @@ def wait_for_port(port: int, timeout: float = 180.0, proc: subprocess.Popen | No
         except OSError:
             time.sleep(0.05)
     raise RuntimeError(f"nothing listening on {port} after {timeout} s")
+
+
+def _kill(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
 
 
 class Stack:
@@ -207,13 +214,17 @@ class Stack:
                 os.killpg(proc.pid, signal.SIGTERM)
                 proc.wait(5)
             except (subprocess.TimeoutExpired, ProcessLookupError):
-                os.killpg(proc.pid, signal.SIGKILL)
+                _kill(proc)
                 proc.wait(5)
 
     def stop(self) -> None:
-        for proc in reversed(self.procs):
-            self._terminate(proc)
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        try:
+            for proc in reversed(self.procs):
+                self._terminate(proc)
+        finally:  # one slow to end, or the test's time-out striking meanwhile, must leave none running
+            for proc in self.procs:
+                _kill(proc)
+            shutil.rmtree(self.tmp, ignore_errors=True)
 
     def __enter__(self) -> Stack:
         try:
