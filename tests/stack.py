@@ -36,8 +36,8 @@ def _port_range() -> Iterator[int]:
     """Ports this test process hands out: a block of its own per xdist worker, below the kernel's
     ephemeral range (32768+), so two workers never pick the same free port at the same moment."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw")
-    base = 20000 + (int(worker) % 12) * 1000
-    return itertools.cycle(range(base, base + 1000))
+    base = 20000 + (int(worker) % 25) * 500
+    return itertools.cycle(range(base, base + 500))
 
 
 _ports = _port_range()
