@@ -4,7 +4,9 @@ Subscriptions come from the process's hub (``robot.live.hub``) under the topic's
 at the link by the process's one lease per topic (``robot.link.topicwatch``): one upstream
 subscription however many tools and pages watch. Each client paces what it gets itself (a
 ``Coalescer`` of its own): its ``throttle_rate``, or for a client that asks none (Foxglove) the
-topic's front-door pace; a slow client's oldest messages go, nobody else waits for it.
+topic's front-door pace; a slow client's oldest messages go, nobody else waits for it. A topic it
+takes every message of keeps at most its ``queue_length`` waiting (as rosbridge's queue: the
+oldest dropped), or with none asked at most ``MAX_BACKLOG`` of all its topics together.
 """
 
 from __future__ import annotations
@@ -87,6 +89,7 @@ class Session:
         self.allowed_services = services or set()
         self.subs: dict[str, dict[str | None, p.Subscribe]] = {}  # topic -> subscription id -> options
         self.rates: dict[str, float | None] = {}
+        self.queue_lengths: dict[str, int] = {}  # topic -> how many of its messages may wait (0: no limit of its own)
         self.compression: dict[str, str] = {}  # topic -> none | cbor | cbor-raw (its latest subscription's)
         self.fragment_size: dict[str, int] = {}  # topic -> the largest text frame before it goes in fragments
         self._fragments = itertools.count()
@@ -178,6 +181,8 @@ class Session:
             self._set_rate(topic)
             return
         del self.subs[topic]
+        self.rates.pop(topic, None)
+        self.queue_lengths.pop(topic, None)
         self.compression.pop(topic, None)
         self.fragment_size.pop(topic, None)
         assert self.hub is not None
@@ -185,9 +190,11 @@ class Session:
         await local_watches().unwatch(self.socket, topic, whole=True)
 
     def _set_rate(self, topic: str) -> None:
-        """One pace per topic per client: the smallest throttle of its subscriptions wins (as rosbridge)."""
+        """One pace and queue per topic per client: the smallest throttle and queue_length of its
+        subscriptions win (as rosbridge)."""
         throttle = min(s.throttle_rate for s in self.subs[topic].values())
         self.rates[topic] = 1000.0 / throttle if throttle else pace_hz(topic, self.paces)
+        self.queue_lengths[topic] = min(s.queue_length for s in self.subs[topic].values())
 
     async def _advertise(self, frame: dict[str, Any]) -> None:
         topic, msg_type = str(p.text(frame, "topic")), str(p.text(frame, "type"))
@@ -244,14 +251,13 @@ class Session:
     def _on_update(self, topic: str, fragment: str) -> None:
         if topic in self.subs and self.coalescer is not None:
             compression = self.compression.get(topic, "none")
-            frame = p.publish_from_fragment(topic, fragment) if compression == "none" else \
-                encoding.frame(topic, fragment, compression)
+            frame: str | bytes | tuple[str, ...] | None = p.publish_from_fragment(topic, fragment) \
+                if compression == "none" else encoding.frame(topic, fragment, compression)
             size = self.fragment_size.get(topic)
             if size and isinstance(frame, str) and len(frame) > size:
-                self.coalescer.offer(topic, self.rates.get(topic),
-                                     tuple(p.fragments(frame, size, f"{topic}:{next(self._fragments)}")))
-            elif frame is not None:
-                self.coalescer.offer(topic, self.rates.get(topic), frame)
+                frame = tuple(p.fragments(frame, size, f"{topic}:{next(self._fragments)}"))
+            if frame is not None:
+                self.coalescer.offer(topic, self.rates.get(topic), frame, self.queue_lengths.get(topic, 0))
 
     async def _write(self, frame: str | bytes | tuple[str, ...]) -> None:
         """One frame, once the client took the previous one (meanwhile its coalescer drops the oldest).

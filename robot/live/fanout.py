@@ -2,7 +2,8 @@
 
 One sender task drains an ordered outbox, so a slow channel layer never blocks the
 link's receive path and memory stays bounded: a coalesced topic holds one slot, and
-every-message topics (logs, events) hold at most ``max_backlog`` entries.
+every-message topics (logs, events) hold at most ``max_backlog`` entries together, and at most
+their own ``queue_length`` each when given one (the oldest of that topic dropped).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import asyncio
 import itertools
 import logging
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -45,15 +46,18 @@ class Coalescer:
         self._last_arrival: dict[str, float] = {}
         self._waiting: dict[str, Any] = {}  # key -> latest value held back by the rate limit
         self._timers: dict[str, asyncio.TimerHandle] = {}
+        self._queued: dict[str, deque[Any]] = {}  # key -> its every-message slots in the outbox, oldest first
         self._seq = itertools.count()
         self._wake = asyncio.Event()
         self._closed = False
         self._task = spawn(self._drain(), loop=loop)
         self.dropped = 0
 
-    def offer(self, key: str, rate_hz: float | None, value: Any) -> None:
+    def offer(self, key: str, rate_hz: float | None, value: Any, queue_length: int = 0) -> None:
+        """``value`` for ``key``: the latest within ``rate_hz``, or with None every one, of which at
+        most ``queue_length`` (0: no limit of its own) wait to be sent, the oldest dropped."""
         if rate_hz is None:
-            self._enqueue((key, next(self._seq)), value)
+            self._enqueue((key, next(self._seq)), value, queue_length)
             return
         now = time.monotonic()
         previous = self._last_arrival.get(key)
@@ -87,23 +91,42 @@ class Coalescer:
         bucket.tokens = max(0.0, bucket.tokens - 1.0)  # one released on its period owes nothing
         self._enqueue(key, value)
 
-    def _enqueue(self, slot: Any, value: Any) -> None:
+    def _enqueue(self, slot: Any, value: Any, queue_length: int = 0) -> None:
         if not self._outbox and self._write_now is not None and self._write_now(value):
             return  # nothing queued before it: no task switch on the way out
+        if isinstance(slot, tuple):  # every message of slot[0]
+            queued = self._queued.setdefault(slot[0], deque())
+            if queue_length and len(queued) >= queue_length:
+                del self._outbox[queued.popleft()]
+                self._count_drop()
+            queued.append(slot)
         if len(self._outbox) >= self._max_backlog and slot not in self._outbox:
-            self._outbox.popitem(last=False)
-            self.dropped += 1
-            if self.dropped % 1000 == 1:
-                log.warning("browser fan-out is behind: %d updates dropped so far", self.dropped)
+            self._forget(self._outbox.popitem(last=False)[0])
+            self._count_drop()
         self._outbox[slot] = value
         self._wake.set()
+
+    def _forget(self, slot: Any) -> None:
+        """``slot`` left the outbox (sent or dropped): an every-message one was its key's oldest."""
+        if isinstance(slot, tuple):
+            queued = self._queued.get(slot[0])
+            if queued and queued[0] == slot:
+                queued.popleft()
+                if not queued:
+                    del self._queued[slot[0]]
+
+    def _count_drop(self) -> None:
+        self.dropped += 1
+        if self.dropped % 1000 == 1:
+            log.warning("fan-out is behind: %d updates dropped so far", self.dropped)
 
     async def _drain(self) -> None:
         while not self._closed:  # until close(), which also cancels it
             await self._wake.wait()
             self._wake.clear()
             while self._outbox and not self._closed:
-                _, value = self._outbox.popitem(last=False)
+                slot, value = self._outbox.popitem(last=False)
+                self._forget(slot)
                 try:
                     await self._send(value)
                 except Exception:
