@@ -19,20 +19,21 @@ from history.access import sensitive_topics
 from robot.commands.audit_writer import writer
 from robot.frontdoor.session import Session
 from robot.frontdoor.tickets import ticket_redeem
-from robot.live.groups import LOCK_GROUP, person_group
+from robot.live.groups import FRONTDOOR_GROUP, LOCK_GROUP, person_group
 from robot.live.hub import FRAMES_EXTENSION
 from robot.models import FrontDoorAllowance, FrontDoorPace
 from robot.teleop.driving import LockEvent
 
 
-def _configuration(user: Any) -> tuple[dict[str, float], set[str], set[str], set[str]]:
+def _configuration(user: Any) -> dict[str, Any]:
     """The admin's paces, allowed topics and services, and the topics this person may not watch:
-    read once, when a tool connects (its subscriptions then cost no database hop each)."""
-    paces = dict(FrontDoorPace.objects.values_list("topic", "hz"))
+    read when a tool connects and again when an admin changes them (its subscriptions then cost
+    no database hop each)."""
     allowed = list(FrontDoorAllowance.objects.values_list("kind", "name"))
-    topics = {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.TOPIC}
-    services = {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.SERVICE}
-    return paces, topics, services, set() if is_operator(user) else sensitive_topics()
+    return {"paces": dict(FrontDoorPace.objects.values_list("topic", "hz")),
+            "topics": {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.TOPIC},
+            "services": {name for kind, name in allowed if kind == FrontDoorAllowance.Kind.SERVICE},
+            "sensitive": set() if is_operator(user) else sensitive_topics()}
 
 
 class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
@@ -47,15 +48,12 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
             return
         self.scope["user"] = user
         self.scope.pop("session", None)  # the ticket lets in, not a cookie the browser happened to send
-        paces, topics, services, sensitive = await database_sync_to_async(_configuration)(user)
-
-        async def refuses(names: list[str]) -> list[str]:
-            return [name for name in names if name in sensitive]
-
+        configuration = await database_sync_to_async(_configuration)(user)
         writer_ = self.scope.get("extensions", {}).get(FRAMES_EXTENSION, {}).get("writer")
         self.session = Session(user=user, operator=is_operator(user), owner=self.channel_name, send=self._send_frame,
-                               writer=writer_, refuses=refuses, paces=paces, topics=topics, services=services)
+                               writer=writer_, **configuration)
         await self.channel_layer.group_add(person_group(user.pk), self.channel_name)
+        await self.channel_layer.group_add(FRONTDOOR_GROUP, self.channel_name)
         if self.session.operator:
             await self.channel_layer.group_add(LOCK_GROUP, self.channel_name)
         await self.accept()
@@ -68,6 +66,7 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
         await self.session.close()
         user = self.scope["user"]
         await self.channel_layer.group_discard(person_group(user.pk), self.channel_name)
+        await self.channel_layer.group_discard(FRONTDOOR_GROUP, self.channel_name)
         await self.channel_layer.group_discard(LOCK_GROUP, self.channel_name)
         await self._audit("frontdoor.disconnect", f"disconnected (code {code})")
 
@@ -80,8 +79,14 @@ class FrontDoorConsumer(NoDatabaseHopMixin, AsyncWebsocketConsumer):
                              else {"type": "websocket.send", "text": frame})
 
     async def access_changed(self, event: dict[str, Any]) -> None:
-        if self.session is not None:
-            await close_if_revoked(self, event, operator=self.session.operator, end=self.session.close)
+        """The person's access, or what the admin lets tools do, changed: close if they may no
+        longer be here, else go on under what is set now."""
+        session = self.session
+        if session is None:
+            return
+        if await close_if_revoked(self, event, operator=session.operator, end=session.close):
+            return
+        await session.configure(**await database_sync_to_async(_configuration)(self.scope["user"]))
 
     async def teleop_lock(self, event: LockEvent) -> None:
         if self.session is not None:

@@ -2,6 +2,9 @@
 changed, a logout): their open drive and audio sockets hear it at once, in every web process
 (the channel layer), and close when they may no longer do what they were opened for. The page
 then connects again with whatever access the person has now, or goes to the login page.
+
+What every front-door tool may do changed (the admin's allowlist or paces, a topic marked sensitive):
+every open front-door socket hears it the same way and reads its configuration again.
 """
 
 from __future__ import annotations
@@ -22,7 +25,9 @@ from django.dispatch import receiver
 
 from cyborg_site.roles import is_operator
 from dashboard.accounts import role_holders
-from robot.live.groups import person_group
+from history.models import TopicPolicy
+from robot.live.groups import FRONTDOOR_GROUP, person_group
+from robot.models import FrontDoorAllowance, FrontDoorPace
 
 log = logging.getLogger(__name__)
 
@@ -33,8 +38,12 @@ LOGGED_OUT = 4401
 
 
 def _tell(user_id: object, *, session_key: str = "") -> None:
+    _tell_group(person_group(user_id), session_key=session_key)
+
+
+def _tell_group(group: str, *, session_key: str = "") -> None:
     event = {"type": ACCESS_CHANGED, "session_key": session_key}
-    transaction.on_commit(lambda: async_to_sync(_send)(person_group(user_id), event))
+    transaction.on_commit(lambda: async_to_sync(_send)(group, event))
 
 
 async def _send(group: str, event: dict[str, Any]) -> None:
@@ -56,6 +65,13 @@ def _groups_changed(sender: type, instance: Any, action: str, reverse: bool, pk_
     if action.startswith("post_"):
         for user in users:
             _tell(user.pk)
+
+
+@receiver([post_save, post_delete], sender=FrontDoorAllowance)
+@receiver([post_save, post_delete], sender=FrontDoorPace)
+@receiver([post_save, post_delete], sender=TopicPolicy)
+def _frontdoor_configured(sender: type, **kwargs: Any) -> None:
+    _tell_group(FRONTDOOR_GROUP)
 
 
 @receiver(user_logged_out)
@@ -120,11 +136,12 @@ async def end_when_revoked(scope: dict[str, Any], *, operator: bool, end: Callab
 
 
 async def close_if_revoked(consumer: Any, event: dict[str, Any], *, operator: bool,
-                           end: Callable[[], Awaitable[Any]]) -> None:
+                           end: Callable[[], Awaitable[Any]]) -> bool:
     """A socket's answer to an access change: ``end`` what it does (driving, listening, talking) and
-    close, if the person may no longer be here or do that."""
+    close, if the person may no longer be here or do that (then True)."""
     code = await database_sync_to_async(still_allowed)(consumer.scope, operator=operator,
                                                        session_key=event.get("session_key", ""))
     if code is not None:
         await end()
         await consumer.close(code=code)
+    return code is not None

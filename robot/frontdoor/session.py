@@ -38,7 +38,6 @@ from robot.teleop.driver import Driver
 log = logging.getLogger(__name__)
 
 Send = Callable[[str | bytes], Awaitable[None]]
-Refuses = Callable[[list[str]], Awaitable[list[str]]]  # the topics of these this person may not watch
 WRITE_POLL_S = 0.005
 # A client whose connection holds more than this not yet taken by the kernel gets nothing more until it
 # has: its coalescer keeps the newest of each paced topic and drops the oldest of the rest meanwhile.
@@ -75,15 +74,19 @@ def pace_hz(topic: str, paces: dict[str, float]) -> float | None:
     return settings.FRONTDOOR_PACE_HZ if fast else None
 
 
+def _sensitive(topic: str) -> str:
+    return f"{topic} is sensitive: operators only"
+
+
 class Session:
     def __init__(self, *, user: Any, operator: bool, owner: str, send: Send, writer: FrameWriter | None = None,
-                 refuses: Refuses, paces: dict[str, float] | None = None, topics: set[str] | None = None,
-                 services: set[str] | None = None) -> None:
+                 sensitive: set[str] | None = None, paces: dict[str, float] | None = None,
+                 topics: set[str] | None = None, services: set[str] | None = None) -> None:
         self.user = user
         self.operator = operator
         self._send = send
         self._writer = writer
-        self._refuses = refuses
+        self.sensitive = sensitive or set()  # the topics this person may not watch
         self.paces = paces or {}
         self.allowed_topics = topics or set()
         self.allowed_services = services or set()
@@ -138,8 +141,8 @@ class Session:
         sub = p.subscribe(frame)
         if sub.compression == "png":
             raise p.BadFrame("png compression is not served: subscribe with none, cbor or cbor-raw")
-        if await self._refuses([sub.topic]):
-            raise Refused(f"{sub.topic} is sensitive: operators only")
+        if sub.topic in self.sensitive:
+            raise Refused(_sensitive(sub.topic))
         if sub.compression == "cbor-raw":
             await encoding.learn(sub.topic)
         first = sub.topic not in self.subs
@@ -188,6 +191,18 @@ class Session:
         assert self.hub is not None
         self.hub.unwatch(self.socket, [whole_key(topic)])
         await local_watches().unwatch(self.socket, topic, whole=True)
+
+    async def configure(self, *, sensitive: set[str], paces: dict[str, float], topics: set[str],
+                        services: set[str]) -> None:
+        """What an admin set changed: paces, allowlist and sensitive topics apply from now on; a
+        subscription to a topic now sensitive ends with a status error naming why."""
+        self.sensitive, self.paces, self.allowed_topics, self.allowed_services = sensitive, paces, topics, services
+        for topic in list(self.subs):
+            if topic in sensitive:
+                await self._unsubscribe({"topic": topic})
+                await self._status("error", f"subscribe: {_sensitive(topic)}")
+            else:
+                self._set_rate(topic)
 
     def _set_rate(self, topic: str) -> None:
         """One pace and queue per topic per client: the smallest throttle and queue_length of its

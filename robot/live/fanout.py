@@ -77,6 +77,9 @@ class Coalescer:
         bucket = self._buckets.get(key)
         if bucket is None:
             bucket = self._buckets[key] = Bucket(1.0 / gap, BURST)
+        elif bucket.rate != 1.0 / gap:  # the key's rate changed: the new one counts from now
+            bucket.level()
+            bucket.rate = 1.0 / gap
         return bucket.level()
 
     def _on_timer(self, key: str, gap: float) -> None:

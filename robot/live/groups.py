@@ -12,6 +12,8 @@ LOCK_GROUP = "teleop.lock"
 # Listening pages hear the robot's microphone; audio pages hear who holds the talk lock.
 MIC_GROUP = "audio.mic"
 TALK_GROUP = "audio.talk"
+# Every front-door socket hears when what tools may do changed (dashboard.revocation).
+FRONTDOOR_GROUP = "frontdoor"
 
 
 def person_group(user_id: object) -> str:
