@@ -257,7 +257,7 @@ def _actions(ros: int) -> dict[str, Action]:
 
 def reload() -> None:
     """Forget cached names (tests that override the settings call this)."""
-    for f in (_topics, _services, _actions, _latch_rules):
+    for f in (_topics, _services, _actions, _latch_rules, _latched):
         f.cache_clear()
     use_ros(None)
 
@@ -268,6 +268,16 @@ def topic(key: str, ros: int | None = None) -> Topic:
 
 def topics(ros: int | None = None) -> tuple[Topic, ...]:
     return tuple(_topics(ros or ros_version()).values())
+
+
+def latched_names() -> frozenset[str]:
+    """The topics the robot publishes latched (a later subscriber gets the last message at once)."""
+    return _latched(ros_version())
+
+
+@cache
+def _latched(ros: int) -> frozenset[str]:
+    return frozenset(t.name for t in _topics(ros).values() if t.latched)
 
 
 def monitored_topics() -> tuple[Topic, ...]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import logging
+import weakref
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -43,6 +44,10 @@ WRITE_POLL_S = 0.005
 # has: its coalescer keeps the newest of each paced topic and drops the oldest of the rest meanwhile.
 MAX_UNSENT = 64 * 1024
 MAX_BACKLOG = 1000  # per client: every-message updates kept while it is slow (oldest dropped)
+# The last message of each latched topic this process's tools take, by hub (one per event loop): a tool
+# subscribing while another one here takes it already gets it at once (the link sends it to a
+# process's first only), as the robot's rosbridge would, from the one upstream subscription.
+_latched: weakref.WeakKeyDictionary[Hub, dict[str, str]] = weakref.WeakKeyDictionary()
 
 
 async def _nothing(text: str | bytes) -> None:
@@ -94,6 +99,8 @@ class Session:
         self.rates: dict[str, float | None] = {}
         self.queue_lengths: dict[str, int] = {}  # topic -> how many of its messages may wait (0: no limit of its own)
         self.compression: dict[str, str] = {}  # topic -> none | cbor | cbor-raw (its latest subscription's)
+        self.latched: set[str] = set()  # the latched topics it takes (their last message kept for the process)
+        self._latest: dict[str, str] = {}
         self.fragment_size: dict[str, int] = {}  # topic -> the largest text frame before it goes in fragments
         self._fragments = itertools.count()
         self._waiting = False  # a frame waits for the client to take what it has (the order holds)
@@ -106,6 +113,7 @@ class Session:
     async def start(self) -> None:
         self.hub = await alocal_hub()
         self.hub.add(self.socket)
+        self._latest = _latched.setdefault(self.hub, {})
         self.coalescer = Coalescer(self._write, loop=asyncio.get_running_loop(), max_backlog=MAX_BACKLOG,
                                    write_now=self._write_now)
 
@@ -159,13 +167,21 @@ class Session:
         assert self.hub is not None
         key = whole_key(sub.topic)
         self.hub.watch(self.socket, [key])  # listening before the link answers (a latched topic's message)
+        if sub.topic in ri.latched_names():
+            self.latched.add(sub.topic)
+        shared = bool(local_watches().whole.get(sub.topic))
         try:
             await local_watches().watch(self.socket, sub.topic, whole=True)
         except TopicRefused as exc:
             if exc.code != "offline":  # offline: the watch stays and works once the robot is back
                 self.subs.pop(sub.topic, None)
+                self.latched.discard(sub.topic)
                 self.hub.unwatch(self.socket, [key])
             raise Refused(f"{sub.topic}: {exc.message}", exc.code) from None
+        latest = self._latest.get(sub.topic) if shared and sub.topic in self.latched else None
+        if latest is not None:
+            self._on_update(sub.topic, latest)
+            return
         stored = (await get_store().aget_many([key])).get(key)
         if stored is not None and not self.socket.pending:
             self._on_update(sub.topic, update_fragment(stored))
@@ -184,6 +200,7 @@ class Session:
             self._set_rate(topic)
             return
         del self.subs[topic]
+        self.latched.discard(topic)
         self.rates.pop(topic, None)
         self.queue_lengths.pop(topic, None)
         self.compression.pop(topic, None)
@@ -264,6 +281,8 @@ class Session:
     # --- what goes to the client ---------------------------------------------------------
 
     def _on_update(self, topic: str, fragment: str) -> None:
+        if topic in self.latched:
+            self._latest[topic] = fragment
         if topic in self.subs and self.coalescer is not None:
             compression = self.compression.get(topic, "none")
             frame: str | bytes | tuple[str, ...] | None = p.publish_from_fragment(topic, fragment) \

@@ -88,6 +88,9 @@ class Watches:
         # opens a topic someone else already holds still sees its latched or rare message at once.
         self.last: dict[str, TopicUpdate] = {}
         self.summarised: set[str] = set()  # the topics whose last message is kept summarised (bulky)
+        # The last message of each topic the interface marks latched, whole even when bulky (a map): a
+        # front-door tool watching it after it came gets it at once, as from the robot's rosbridge.
+        self.latched: dict[str, TopicUpdate] = {}
         self._listing: tuple[float, list[dict[str, Any]]] | None = None
         assert link.loop is not None
         self.coalescer = Coalescer(self._send, loop=link.loop)
@@ -121,7 +124,9 @@ class Watches:
                     continue
                 new = name not in table
                 self._lease(table, name, msg_type, holder)
-                if new and name in self.last:
+                if new and table is self.whole and name in self.latched:
+                    self.coalescer.offer(whole_key(name), None, self.latched[name])
+                elif new and name in self.last:
                     if table is self.whole:
                         if name not in self.summarised:
                             self.coalescer.offer(whole_key(name), None, {**self.last[name], "key": whole_key(name)})
@@ -182,6 +187,7 @@ class Watches:
                 self.link.unsubscribe(name, holder=HOLDER)
                 if name not in self.link.subscribed:
                     self.last.pop(name, None)
+                    self.latched.pop(name, None)
                 log.info("nobody watches %s any more: let go of its subscription", name)
 
     async def _sweep_forever(self) -> None:
@@ -195,9 +201,12 @@ class Watches:
         for topic, times in self.counters.values():
             if topic == name:
                 times.append(t)
+        whole: TopicUpdate = {"type": "robot.update", "key": whole_key(name), "topic": name, "msg_type": msg_type,
+                              "msg": msg, "t": t}
         if name in self.whole:  # every message, whole, for the front door's clients (paced per client)
-            self.coalescer.offer(whole_key(name), None, {"type": "robot.update", "key": whole_key(name),
-                                                          "topic": name, "msg_type": msg_type, "msg": msg, "t": t})
+            self.coalescer.offer(whole_key(name), None, whole)
+        if name in ri.latched_names():
+            self.latched[name] = whole
         if _bulky(msg):  # never keep a whole map or costmap alive just in case someone opens it
             msg = summarise(msg)
             self.summarised.add(name)

@@ -107,3 +107,22 @@ def test_a_ticket_needs_a_token_or_a_session(stack):
     with pytest.raises(urllib.error.HTTPError) as refused:
         post(stack, "/api/frontdoor/ticket/")
     assert refused.value.code in (401, 403)
+
+
+def test_a_later_tool_gets_the_latched_map_at_once_from_the_one_upstream_subscription(stack):
+    topic = ri.topic("map").name
+    first, second = ros_for(stack, "vera"), ros_for(stack, "vera")
+    try:
+        maps = Inbox()
+        roslibpy.Topic(first, topic, "nav_msgs/OccupancyGrid").subscribe(maps)
+        maps.wait(timeout=30, what="the map, first tool")
+        grid = maps.items[0]
+        assert len(grid["data"]) == grid["info"]["width"] * grid["info"]["height"] > 0  # whole, not summarised
+        later = Inbox()
+        roslibpy.Topic(second, topic, "nav_msgs/OccupancyGrid").subscribe(later)
+        later.wait(timeout=10, what="the map, second tool")
+        assert later.items[0] == grid
+        assert subscriptions(stack, topic) == 1
+    finally:
+        first.close()
+        second.close()
