@@ -405,3 +405,44 @@ def test_taking_an_operators_role_closes_their_sockets_in_both_web_processes_wit
         topology.tokens.pop("otto", None)
         topology.manage("shell", "-c", "from django.contrib.auth.models import Group, User\n"
                         "User.objects.get(username='otto').groups.set([Group.objects.get(name='operator')])")
+
+
+def test_rosbridge_tools_work_through_either_web_process(topology):
+    """The front door on each Daphne, neither holding the link: an unmodified roslibpy viewer watches
+    odometry and an operator drives under the drive lock until the deadman's zero."""
+    import roslibpy
+
+    from tests.sim.support import Inbox
+
+    cmd_vel, odom_topic = ri.topic("cmd_vel").name, ri.topic("odom").name
+    forward = {"linear": {"x": 0.3, "y": 0, "z": 0}, "angular": {"x": 0, "y": 0, "z": 0}}
+
+    def tool(web: int, user: str) -> roslibpy.Ros:
+        status, body = topology.fetch("/api/frontdoor/ticket/", web=web, method="POST", user=user)
+        assert status == 200, body
+        ros = roslibpy.Ros(f"ws://127.0.0.1:{topology.web_ports[web]}/rosbridge/?ticket={body['ticket']}")
+        ros.run(timeout=30)
+        return ros
+
+    for web in (0, 1):
+        viewer, operator = tool(web, "vera"), tool(web, "olga")
+        try:
+            odom = Inbox()
+            roslibpy.Topic(viewer, odom_topic, "nav_msgs/Odometry").subscribe(odom)
+            odom.wait(lambda items: len(items) >= 3, timeout=30, what=f"odometry on web {'ab'[web]}")
+            before = len(topology.received(cmd_vel))
+            cmd = roslibpy.Topic(operator, cmd_vel, "geometry_msgs/Twist")
+            cmd.advertise()
+            for _ in range(10):
+                cmd.publish(roslibpy.Message(forward))
+                time.sleep(0.1)
+            deadline = time.monotonic() + 20
+            while not any(m["linear"]["x"] > 0.2 for m in topology.received(cmd_vel)[before:]):
+                assert time.monotonic() < deadline, f"no forward command through web {'ab'[web]}"
+                time.sleep(0.1)
+            while topology.received(cmd_vel)[-1]["linear"]["x"] != 0.0:  # the tool stopped: the deadman
+                assert time.monotonic() < deadline + 10, "no deadman's zero"
+                time.sleep(0.1)
+        finally:
+            viewer.close()
+            operator.close()
