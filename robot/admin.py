@@ -36,7 +36,7 @@ class SoundClipAdmin(admin.ModelAdmin):
 
 @admin.register(FrontDoorAllowance)
 class FrontDoorAllowanceAdmin(admin.ModelAdmin):
-    """What ROS tools' operators may further publish or call (read when a tool connects)."""
+    """What ROS tools' operators may further publish or call (open tools hear a change within a second)."""
 
     list_display = ("kind", "name")
     list_filter = ("kind",)
@@ -44,7 +44,7 @@ class FrontDoorAllowanceAdmin(admin.ModelAdmin):
 
 @admin.register(FrontDoorPace)
 class FrontDoorPaceAdmin(admin.ModelAdmin):
-    """How often a tool asking no throttle gets a topic (read when a tool connects)."""
+    """How often a tool asking no throttle gets a topic (open tools hear a change within a second)."""
 
     list_display = ("topic", "hz")
 

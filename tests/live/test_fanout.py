@@ -126,3 +126,43 @@ async def test_closing_it_ends_its_sender_mid_send():
     coalescer.close()
     done, _ = await asyncio.wait({coalescer._task}, timeout=DEADLINE_S)
     assert done, "the sender went on"
+
+
+async def test_a_queue_length_keeps_only_that_many_of_a_topic_waiting_the_oldest_dropped():
+    sent = []
+    release = asyncio.Event()
+
+    async def send(value):
+        await release.wait()  # a slow client
+        sent.append(value)
+
+    coalescer = Coalescer(send, loop=asyncio.get_running_loop())
+    for i in range(10):
+        coalescer.offer("log", None, ("log", i), queue_length=3)
+        coalescer.offer("events", None, ("events", i))
+    await asyncio.sleep(0.01)
+    release.set()
+    await asyncio.sleep(0.05)
+    coalescer.close()
+    assert [i for key, i in sent if key == "log"] == [7, 8, 9]  # the newest 3 of the queued topic
+    assert [i for key, i in sent if key == "events"] == list(range(10))  # and every one of the other
+    assert coalescer.dropped == 7
+
+
+async def test_a_rate_change_applies_to_the_next_message():
+    sent = []
+    loop = asyncio.get_running_loop()
+
+    async def send(value):
+        sent.append(loop.time())
+
+    coalescer = Coalescer(send, loop=loop)
+    for _ in range(20):
+        coalescer.offer("pose", 100.0, 0)
+        await asyncio.sleep(0.01)
+    fast = len(sent)
+    for _ in range(30):
+        coalescer.offer("pose", 5.0, 0)
+        await asyncio.sleep(0.01)
+    coalescer.close()
+    assert fast >= 15 and len(sent) - fast <= 1 + BURST  # 0.3 s at 5 Hz: its burst and a token at most
