@@ -29,7 +29,7 @@ def test_a_viewer_subscribes_lists_topics_and_shares_one_upstream_subscription(s
             batteries.append(Inbox())
             roslibpy.Topic(ros, BATTERY, "std_msgs/Float32").subscribe(batteries[-1])
         for odom, battery in zip(odoms, batteries, strict=True):
-            msg = odom.wait(lambda items: items[-1] if len(items) >= 3 else None, timeout=30, what="odometry")
+            msg = odom.wait(lambda items: items[-1] if len(items) >= 5 else None, timeout=30, what="odometry")
             assert set(msg) >= {"header", "pose", "twist"} and "covariance" in msg["pose"]  # whole, not summarised
             battery.wait(timeout=30, what="battery")
             assert 0.0 <= battery.items[0]["data"] <= 1.0
@@ -38,7 +38,9 @@ def test_a_viewer_subscribes_lists_topics_and_shares_one_upstream_subscription(s
             roslibpy.ServiceRequest({}), timeout=20)
         assert ODOM in topics["topics"] and BATTERY in topics["topics"]
         gaps = [b - a for a, b in zip(odoms[0].times, odoms[0].times[1:], strict=False)]
-        assert sum(gaps) / len(gaps) >= 0.1  # its throttle_rate (200 ms) applied: far fewer than the 10+ Hz
+        # its throttle_rate (200 ms) applied: far fewer than the 10+ Hz (the first two may come together:
+        # the stored message at once, then the newest)
+        assert sum(gaps) / len(gaps) >= 0.1
     finally:
         for ros in clients:
             ros.close()
