@@ -11,6 +11,7 @@ from robot import interface as ri
 from robot.live.keys import MAP_PAGE_KEYS
 from robot.navigation.mapimage import is_version, map_dir, png_path
 from robot.navigation.selectors import location_list, map_meta
+from robot.navigation.status import FOREIGN_GOAL_BY, GOAL_ID_PREFIX
 from robot.overlays.costmap import LAYERS, costmap_dir, is_tile_name
 
 
@@ -23,6 +24,8 @@ def map_page(request: HttpRequest) -> HttpResponse:
         "backend": settings.NAVIGATION_BACKEND,
         "stale_after_s": settings.STALE_AFTER_S,
         "goal_status": ri.GOAL_STATUS,
+        "goal_id_prefix": GOAL_ID_PREFIX,
+        "foreign_goal_by": FOREIGN_GOAL_BY,
         "urls": {
             "map": reverse("api-map"),
             "overlays": reverse("api-map-overlays"),

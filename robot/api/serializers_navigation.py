@@ -34,10 +34,14 @@ MapMeta = shape(
     origin=Pose(help_text="map position of the grid's bottom-left corner"), frame=serializers.CharField(),
     image_url=serializers.CharField(), received=serializers.FloatField(help_text="epoch seconds"))
 Goal = shape(
-    "Goal", **same(serializers.CharField, "id", "by", "status_text"),
+    "Goal", **same(serializers.CharField, "id", "status_text"),
+    by=serializers.CharField(help_text='who sent it: a user, or "another tool" for a goal this product did not send'),
     action=serializers.CharField(help_text="move_base or navigation"),
-    **same(serializers.FloatField, "x", "y", "yaw", "sent"),
+    **same(serializers.FloatField, "x", "y", "yaw", allow_null=True,
+           help_text="the target; null for a goal another tool sent (the robot's goal status does not say)"),
+    sent=serializers.FloatField(help_text="epoch seconds: sent, or first listed by the robot"),
     location=serializers.CharField(allow_null=True),
+    foreign=serializers.BooleanField(help_text="another tool sent this goal, not this product"),
     status=serializers.CharField(help_text="pending, active, succeeded, aborted, cancelled, cancelling, …"))
 InitialPoseResult = shape("InitialPoseResult", detail=serializers.CharField(), pose=Pose())
 NavigationStatus = shape(

@@ -55,6 +55,15 @@ def progress_text(feedback: dict[str, Any]) -> str:
     return f"{float(feedback['distance_remaining']):.1f} m to go, about {seconds:.0f} s"
 
 
+def foreign_uuid(goal_id: str) -> bytes | None:
+    """The UUID of a goal another tool sent, as the model names it (its hex); None for any other id."""
+    try:
+        raw = bytes.fromhex(goal_id)
+    except ValueError:
+        return None
+    return raw if len(raw) == 16 else None
+
+
 def cancel_request(uuid: list[int] | None, before: float | None = None) -> dict[str, Any]:
     """action_msgs/CancelGoal: a zero UUID and stamp cancel every goal; a zero UUID and a stamp, those
     accepted up to it; a UUID, that goal."""
@@ -86,6 +95,8 @@ class Ros2Goals:
             return self._send(action, str(msg["goal_id"]["id"]), msg["goal"])
         goal_id = str(msg.get("id") or "")
         uuid = next((bytes.fromhex(u) for u, ours in self.uuids.items() if ours == goal_id), None) if goal_id else None
+        if uuid is None and goal_id:
+            uuid = foreign_uuid(goal_id)
         request = cancel_request(list(uuid) if uuid else None, time.time() if goal_id and not uuid else None)
         ros = self.ros()
         if ros is None:

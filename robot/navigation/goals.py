@@ -19,7 +19,7 @@ from robot.link.bus import apublish, arequest
 from robot.live.announce import aget_state, apublish_state
 from robot.live.groups import GOAL_KEY
 from robot.navigation.selectors import anavigation_status
-from robot.navigation.status import TERMINAL_STATES, goal_view
+from robot.navigation.status import GOAL_ID_PREFIX, TERMINAL_STATES, goal_view
 from robot.navigation.transforms import normalize_angle, yaw_to_quaternion
 from robot.navigation.validation import POSE_FIELDS, acheck_position, audit_params, clean_yaw, number, only_fields
 
@@ -30,7 +30,7 @@ ZERO_STAMP = {"secs": 0, "nsecs": 0}  # actionlib stamps goals with the robot's 
 
 
 def new_goal_id() -> str:
-    return f"cyborg_commander-{uuid.uuid4().hex[:16]}"
+    return f"{GOAL_ID_PREFIX}{uuid.uuid4().hex[:16]}"
 
 
 def pose(x: float, y: float, yaw: float) -> dict[str, Any]:

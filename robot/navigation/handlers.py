@@ -81,7 +81,7 @@ async def track_goal_statuses(link: RobotLink) -> None:
 
     def listener(name: str, msg_type: str, msg: dict[str, Any], t: float) -> None:
         if name in names:
-            pending.append(msg)
+            pending.append({**msg, "action": names[name]})
             wake.set()
 
     link.listeners.append(listener)

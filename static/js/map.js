@@ -30,13 +30,31 @@ let drawQueued = false;
 
 // --- drawing ---------------------------------------------------------------------------
 
+// As the server's goal_view: the latest goal wins, ours or one another tool sent (an id not ours).
+function newestForeignGoal() {
+  let newest = null;
+  for (const [id, s] of Object.entries(state.statuses.goals || {})) {
+    if (id.startsWith(config.goal_id_prefix)) continue;
+    const since = s.since ?? s.t;
+    if (!newest || since > newest.since) newest = { id, since, s };
+  }
+  return newest;
+}
+
 function currentGoal() {
   const goal = state.goal;
+  const foreign = newestForeignGoal();
+  if (foreign && (!goal || foreign.since > goal.sent)) {
+    const s = foreign.s;
+    return { id: foreign.id, action: s.action || "move_base", x: null, y: null, yaw: null, location: null,
+      by: config.foreign_goal_by, sent: foreign.since, foreign: true, status: s.state, status_text: s.text || "",
+      finished: TERMINAL.has(s.state) };
+  }
   if (!goal) return null;
   const reported = state.statuses.goals?.[goal.id];
   let status = reported ? reported.state : "pending";
   if (goal.cancel_requested && (status === "pending" || status === "active")) status = "cancelling";
-  return { ...goal, status, status_text: reported?.text || "", finished: TERMINAL.has(status) };
+  return { ...goal, foreign: false, status, status_text: reported?.text || "", finished: TERMINAL.has(status) };
 }
 
 function scheduleDraw() {
@@ -178,9 +196,10 @@ function renderGoal() {
   pill.className = `pill goal-${goal ? goal.status : "none"}`;
   root.dataset.goalStatus = goal ? goal.status : "";
   root.dataset.goalId = goal ? goal.id : "";
-  $("goal-target").textContent = goal
-    ? `${goal.location ? goal.location + " · " : ""}x ${goal.x.toFixed(2)} · y ${goal.y.toFixed(2)} · ${(goal.yaw * 180 / Math.PI).toFixed(0)}° (by ${goal.by || "?"})`
-    : "—";
+  root.dataset.goalForeign = goal?.foreign ? "1" : "";
+  $("goal-target").textContent = !goal ? "—"
+    : goal.foreign ? `sent by ${goal.by}`
+    : `${goal.location ? goal.location + " · " : ""}x ${goal.x.toFixed(2)} · y ${goal.y.toFixed(2)} · ${(goal.yaw * 180 / Math.PI).toFixed(0)}° (by ${goal.by || "?"})`;
   $("goal-text").textContent = goal?.status_text || "";
   renderProgress(goal);
   scheduleDraw();
@@ -199,7 +218,7 @@ function renderProgress(goal = currentGoal()) {
 function cancelText(result) {
   const goal = result.goal;
   if (!goal) return "Navigation stopped: no goal of ours was under way.";
-  const where = goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`;
+  const where = goal.foreign ? `sent by ${goal.by}` : goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`;
   return goal.finished && !result.cancel_sent ? `The goal to ${where} had already ended (${goal.status}).`
     : `Cancelling the goal to ${where}.`;
 }

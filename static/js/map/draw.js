@@ -50,7 +50,7 @@ function drawPlan(ctx, view, plan) {
 }
 
 function drawGoal(ctx, view, goal) {
-  if (!goal) return;
+  if (!goal || goal.x == null) return;  // another tool's goal: the robot's status does not say where
   const color = goal.status === "succeeded" ? COLORS.done
     : ["aborted", "rejected", "lost", "cancelled"].includes(goal.status) ? COLORS.failed : COLORS.goal;
   const [sx, sy] = view.toScreen(goal.x, goal.y);

@@ -7,7 +7,7 @@ const MIN_SPEED = 0.02; // m/s: slower than this is standing, no estimate
 
 // Metres left from the robot to the goal along plan ([[x, y], …], ending at the goal).
 export function distanceLeft(robot, goal, plan) {
-  if (!robot || !goal) return null;
+  if (!robot || !goal || goal.x == null) return null;
   const straight = Math.hypot(goal.x - robot.x, goal.y - robot.y);
   if (!plan?.length) return straight;
   let nearest = 0, best = Infinity;
