@@ -63,6 +63,7 @@ _DEFAULT_TOPICS: tuple[Topic, ...] = (
     _T("map", "/map", "nav_msgs/OccupancyGrid", None, True, latched=True),
     _T("plan", "/move_base/NavfnROS/plan", "nav_msgs/Path", 2, True),
     _T("move_base_status", "/move_base/status", "actionlib_msgs/GoalStatusArray", 2, True),
+    _T("navigation_status", "/cyborg_navigation/navigation/status", "actionlib_msgs/GoalStatusArray", 2, True),
     # map overlays: subscribed while a map page shows them (robot/overlays/)
     _T("global_costmap", "/move_base/global_costmap/costmap", "nav_msgs/OccupancyGrid"),
     _T("local_costmap", "/move_base/local_costmap/costmap", "nav_msgs/OccupancyGrid"),
@@ -139,6 +140,7 @@ ROS_VERSIONS = (ROS1, ROS2)
 _ROS2_TOPICS: dict[str, tuple[str, str]] = {
     "plan": ("/plan", "nav_msgs/msg/Path"),
     "move_base_status": ("/navigate_to_pose/_action/status", "action_msgs/msg/GoalStatusArray"),
+    "navigation_status": ("/cyborg_navigation/navigation/_action/status", "action_msgs/msg/GoalStatusArray"),
     "global_costmap": ("/global_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
     "local_costmap": ("/local_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
     "global_costmap_updates": ("/global_costmap/costmap_updates", "map_msgs/msg/OccupancyGridUpdate"),

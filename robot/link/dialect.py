@@ -50,12 +50,14 @@ def goal_id_from_uuid(uuid: Any) -> str:
 
 
 def _stamps(value: Any) -> None:
-    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is, in place (the message is fresh from the
-    wire and ours); lists of numbers (ranges, cells) are not walked."""
+    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is, and a header gets ROS 1's ``seq`` (0), in
+    place (the message is fresh from the wire and ours); lists of numbers (ranges, cells) are not walked."""
     if isinstance(value, dict):
         if "nanosec" in value and len(value) == 2 and "sec" in value:
             value["secs"], value["nsecs"] = value.pop("sec"), value.pop("nanosec")
             return
+        if "frame_id" in value and "stamp" in value and "seq" not in value:
+            value["seq"] = 0
         for item in value.values():
             if isinstance(item, dict | list):
                 _stamps(item)

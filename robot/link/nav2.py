@@ -80,7 +80,10 @@ class Ros2Goals:
         self.ros = ros
         self.timeout_s = timeout_s
         self.uuids: dict[str, str] = {}  # rosbridge's UUID (hex) -> our goal id
-        self._unmatched: collections.deque[tuple[float, str]] = collections.deque()  # (sent at, our id)
+        # Per action status topic, our goals whose UUID is not known yet: (sent at, our id).
+        self._unmatched: collections.defaultdict[str, collections.deque[tuple[float, str]]] = \
+            collections.defaultdict(collections.deque)
+        self._listed: collections.defaultdict[str, set[str]] = collections.defaultdict(set)  # the last status's UUIDs
         self._connections: dict[str, roslibpy.Ros] = {}
         # Where a goal's status in the model goes (the link's own message path; from the reactor's thread).
         self.on_status: Callable[[dict[str, Any]], None] = lambda msg: None
@@ -108,7 +111,7 @@ class Ros2Goals:
     def _send(self, action: ri.Action, goal_id: str, goal: dict[str, Any]) -> LinkReply:
         ros = LinkRos(self.url)
         self._connections[goal_id] = ros
-        self._unmatched.append((time.time(), goal_id))
+        self._unmatched[action.name + ri.ACTION_STATUS_SUFFIX].append((time.time(), goal_id))
 
         def status(code: int, text: str) -> None:
             self.on_status({"status_list": [{"goal_id": {"id": goal_id, "stamp": {"secs": 0, "nsecs": 0}},
@@ -129,15 +132,19 @@ class Ros2Goals:
             roslibpy.Goal(goal_args(action, goal)), done, feedback, done)
         return {"ok": True}
 
-    def name_goals(self, msg: dict[str, Any]) -> dict[str, Any]:
-        """A status message in the model, our goals under our ids (learning rosbridge's UUIDs for them)."""
-        ours = set(self.uuids.values()) | {gid for _, gid in self._unmatched}
+    def name_goals(self, msg: dict[str, Any], status_topic: str) -> dict[str, Any]:
+        """A status message in the model, our goals under our ids (learning rosbridge's UUIDs for them: a
+        goal listed before, another tool's, is never taken for ours)."""
+        unmatched = self._unmatched[status_topic]
+        ours = set(self.uuids.values()) | {gid for _, gid in unmatched}
+        listed_before = self._listed[status_topic]
+        self._listed[status_topic] = {s["goal_id"]["id"] for s in msg.get("status_list", [])}
         for status in msg.get("status_list", []):
             gid = status["goal_id"]["id"]
             if gid in ours:
                 continue
-            if gid not in self.uuids and self._unmatched and status["status"] in (0, 1):
-                self.uuids[gid] = self._unmatched.popleft()[1]
+            if gid not in self.uuids and gid not in listed_before and unmatched and status["status"] in (0, 1):
+                self.uuids[gid] = unmatched.popleft()[1]
             if gid in self.uuids:
                 status["goal_id"]["id"] = self.uuids[gid]
         return msg

@@ -143,8 +143,9 @@ class Subscriptions(Upkeep):
             return
         self.heard_at = t
         msg = to_model(self.ros_version, msg_type, msg)
-        if self.ros_version == ri.ROS2 and name == ri.topic("move_base_status").name:
-            msg = self.nav2.name_goals(msg)
+        if self.ros_version == ri.ROS2 and name in (ri.topic("move_base_status").name,
+                                                    ri.topic("navigation_status").name):
+            msg = self.nav2.name_goals(msg, name)
         if name == ri.topic("rosout").name and msg.get("name") == ROSBRIDGE_NODE:
             self._note_refusal(str(msg.get("msg", "")))
         for listener in self.listeners:

@@ -72,10 +72,8 @@ async def _render_and_publish(msg: dict[str, Any], t: float, seq: int) -> None:
 
 async def track_goal_statuses(link: RobotLink) -> None:
     """Keep the statuses the robot reports for goals, past actionlib's few-second window."""
-    names = {ri.action_topic(key, "status", ros)[0]: key for key in ("move_base", "navigation")
-             for ros in ri.ROS_VERSIONS}  # the link may find out the robot's ROS later
-    for key in ("move_base", "navigation"):
-        link.subscribe(*ri.action_topic(key, "status"))
+    # The link's registry holds both status topics, by the names of the ROS it finds the robot runs.
+    names = {ri.topic(f"{key}_status", ros).name: key for key in ("move_base", "navigation") for ros in ri.ROS_VERSIONS}
     pending: list[dict[str, Any]] = []
     wake = asyncio.Event()
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 
 import pytest
 
@@ -32,9 +33,9 @@ def sim(request):
 EITHER_ROS = pytest.mark.parametrize("sim", [1, 2], indirect=True, ids=["ros1", "ros2"])
 
 
-@pytest.fixture
-def nav_link(sim, settings):
-    """The link and its goal-status tracker (not the other background services), once the map arrived."""
+@contextlib.contextmanager
+def linked(sim, settings):
+    """The link to ``sim`` and its goal-status tracker (not the other background services), once the map arrived."""
     settings.ROSBRIDGE_URL = sim.url
     runner = LinkThread()
     runner.start()
@@ -46,6 +47,12 @@ def nav_link(sim, settings):
     finally:
         tracker.cancel()
         runner.stop()
+
+
+@pytest.fixture
+def nav_link(sim, settings):
+    with linked(sim, settings) as link:
+        yield link
 
 
 def stored(key: str):
@@ -63,4 +70,5 @@ def wait_goal_state(client, *states: str, timeout: float = 20.0) -> str:
                       what=f"goal status in {states}")
 
 
-__all__ = ["EITHER_ROS", "GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "goal_state", "stored", "wait_goal_state"]
+__all__ = ["EITHER_ROS", "GOAL_KEY", "GOAL_STATUS_KEY", "MAP_META_KEY", "goal_state", "linked", "stored",
+           "wait_goal_state"]
