@@ -12,7 +12,10 @@ import base64
 from collections.abc import Callable
 from typing import Any
 
+import roslibpy
+
 from robot import interface as ri
+from robot.link.rosclient import call_service
 
 # /rosapi/get_ros_version: only ROS 2's rosapi serves it.
 ROS_VERSION_SERVICE = ("/rosapi/get_ros_version", "rosapi_msgs/srv/GetROSVersion")
@@ -41,6 +44,18 @@ def version_from_answer(ok: bool, values: Any) -> int | None:
     if not ok and MISSING_SERVICE in str(values):
         return ri.ROS1
     return None
+
+
+async def ask_ros_version(ros: roslibpy.Ros, timeout_s: float) -> tuple[int | None, str]:
+    """The ROS the robot runs, as its rosapi says (None and why when it does not say): the service list
+    first, then /rosapi/get_ros_version if the list names it."""
+    listing = ri.service("rosapi_services")
+    listed = await call_service(ros, listing.name, listing.type, {}, timeout_s)
+    if offers_version_service(listed["ok"], listed.get("values")) is False:
+        return ri.ROS1, ""
+    reply = await call_service(ros, *ROS_VERSION_SERVICE, {}, timeout_s)
+    version = version_from_answer(reply["ok"], reply.get("values") if reply["ok"] else reply.get("error"))
+    return version, str(reply.get("error") or listed.get("error") or "")
 
 
 def goal_id_from_uuid(uuid: Any) -> str:

@@ -31,11 +31,13 @@ NAV2_TYPE = "nav2_msgs/action/NavigateToPose"
 
 
 def action_of(topic: str) -> tuple[ri.Action, str] | None:
-    """(the action, ``goal`` or ``cancel``) when ``topic`` is one of an action's inputs."""
-    for action in ri.actions():
-        for suffix in ("goal", "cancel"):
-            if topic == f"{action.name}/{suffix}":
-                return action, suffix
+    """(the ROS 2 action, ``goal`` or ``cancel``) when ``topic`` is one of an action's inputs, by either
+    ROS's name: a web process that has not heard which ROS the robot runs names it as ROS 1 does."""
+    for ros in ri.ROS_VERSIONS:
+        for action in ri.actions(ros):
+            for suffix in ("goal", "cancel"):
+                if topic == f"{action.name}/{suffix}":
+                    return ri.action(action.key, ri.ROS2), suffix
     return None
 
 

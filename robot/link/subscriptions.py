@@ -13,8 +13,7 @@ from typing import Any
 import roslibpy
 
 from robot import interface as ri
-from robot.link.dialect import ROS_VERSION_SERVICE, offers_version_service, to_model, version_from_answer
-from robot.link.rosclient import call_service
+from robot.link.dialect import ask_ros_version, to_model
 from robot.link.status import ROSBRIDGE_NODE, Upkeep
 from robot.live.announce import aannounce
 from robot.live.groups import TopicUpdate
@@ -63,17 +62,9 @@ class Subscriptions(Upkeep):
         """Ask the robot which ROS it runs; on a change, use that ROS's names and subscribe by them."""
         if self.ros is None:
             return
-        listing = ri.service("rosapi_services")
-        listed = await call_service(self.ros, listing.name, listing.type, {}, self.service_timeout_s)
-        reply = listed
-        if offers_version_service(listed["ok"], listed.get("values")) is False:
-            version: int | None = ri.ROS1
-        else:
-            reply = await call_service(self.ros, *ROS_VERSION_SERVICE, {}, self.service_timeout_s)
-            version = version_from_answer(reply["ok"], reply.get("values") if reply["ok"] else reply.get("error"))
+        version, why = await ask_ros_version(self.ros, self.service_timeout_s)
         if version is None:
-            log.warning("could not find out which ROS the robot runs (%s); using ROS %d",
-                        reply.get("error"), self.ros_version)
+            log.warning("could not find out which ROS the robot runs (%s); using ROS %d", why, self.ros_version)
             return
         ri.use_ros(version)
         if version == self.ros_version:
