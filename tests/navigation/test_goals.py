@@ -5,7 +5,7 @@ import pytest
 from robot import interface as ri
 from robot.models import AuditEntry
 from tests.helpers import wait_until
-from tests.navigation.conftest import EITHER_ROS, wait_goal_state
+from tests.navigation.conftest import EITHER_ROS, stored, wait_goal_state
 
 # Commands audit through database_sync_to_async, which closes a PostgreSQL connection that
 # sits in a test transaction: these tests need real transactions.
@@ -40,6 +40,11 @@ def test_it_stops_the_robot_on_cancel(nav_link, sim, operator_api):
     assert res.status_code == 200, res.json()
     wait_goal_state(operator_api, "active")
     wait_until(lambda: abs(sim.snapshot()["state"]["v"]) > 0.05, what="the robot to drive")
+    # The global plan the Map draws, in the map's frame, to the goal.
+    plan = wait_until(lambda: (p := stored("plan")) and p["poses"] and p, what="the robot's plan")
+    assert plan["header"]["frame_id"] == ri.MAP_FRAME
+    end = plan["poses"][-1]["pose"]["position"]
+    assert math.hypot(end["x"] - 8.0, end["y"] + 5.0) < 0.3
     if sim.robot.ros == ri.ROS2:  # Nav2's feedback: the way left, on the Map
         wait_until(lambda: "m to go" in operator_api.get("/api/navigation/status/").json()["goal"]["status_text"],
                    what="the distance left in the goal's status")
@@ -53,6 +58,7 @@ def test_it_stops_the_robot_on_cancel(nav_link, sim, operator_api):
     wait_until(lambda: abs(sim.snapshot()["state"]["v"]) < 0.01, what="the robot to stand still")
 
 
+@EITHER_ROS
 def test_it_relocates_the_robot_with_an_initial_pose(nav_link, sim, operator_api):
     res = operator_api.post("/api/navigation/initial-pose/", {"x": 4.0, "y": 2.0, "yaw": math.pi}, format="json")
     assert res.status_code == 200, res.json()

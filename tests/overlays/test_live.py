@@ -22,14 +22,16 @@ from robot.live.groups import (
 from robot.live.keys import OVERLAY_SOURCES
 from robot.overlays.link import overlays
 from simulator.world import OCCUPIED
+from tests.conftest import EITHER_ROS
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
 
 @pytest.fixture
-async def overlay_link(link):
+async def overlay_link(link, sim):
     assert overlays.listen in link.listeners  # from the link's start: the latched /tf_static comes once
+    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     yield link
 
 
@@ -55,6 +57,7 @@ def placed(msg):
     return "points" in msg and not msg.get("problem")
 
 
+@EITHER_ROS
 async def test_the_laser_overlay_lands_on_the_walls_the_robot_sees(overlay_link, sim, viewer):
     ws = await watching(viewer, [OVERLAY_SCAN_KEY])
     try:
@@ -72,6 +75,7 @@ async def test_the_laser_overlay_lands_on_the_walls_the_robot_sees(overlay_link,
         await ws.disconnect()
 
 
+@EITHER_ROS
 async def test_two_pages_share_one_subscription_and_unwatching_stops_the_frames(overlay_link, sim, viewer, operator):
     pages = [await watching(u, [OVERLAY_PARTICLES_KEY, OVERLAY_FOOTPRINT_KEY]) for u in (viewer, operator)]
     try:
@@ -101,6 +105,7 @@ async def test_two_pages_share_one_subscription_and_unwatching_stops_the_frames(
             await ws.disconnect()
 
 
+@EITHER_ROS
 async def test_overlay_subscriptions_go_upstream_once_the_last_page_lets_go(overlay_link, sim, viewer, operator,
                                                                             settings):
     settings.TOPICS_IDLE_GRACE_S = 0.3
@@ -140,6 +145,7 @@ async def fetch_tile(user, meta, row, col):
     return np.array(Image.open(io.BytesIO(b"".join(response.streaming_content))))
 
 
+@EITHER_ROS
 async def test_the_global_costmap_is_served_as_tiles_and_an_update_patches_its_tile(overlay_link, sim, viewer):
     ws = await watching(viewer, [OVERLAY_GLOBAL_COSTMAP_KEY])
     try:
@@ -173,6 +179,7 @@ async def test_the_global_costmap_is_served_as_tiles_and_an_update_patches_its_t
         await ws.disconnect()
 
 
+@EITHER_ROS
 async def test_the_local_costmap_is_placed_on_the_map_through_odometry(overlay_link, sim, viewer):
     ws = await watching(viewer, [OVERLAY_LOCAL_COSTMAP_KEY])
     try:
@@ -190,6 +197,7 @@ async def test_the_local_costmap_is_placed_on_the_map_through_odometry(overlay_l
         await ws.disconnect()
 
 
+@EITHER_ROS
 async def test_a_page_is_told_why_an_overlay_cannot_be_placed(overlay_link, sim, viewer):
     name = ri.topic("local_plan").name  # the simulator publishes none while the robot stands
     ws = await watching(viewer, [OVERLAY_LOCAL_PLAN_KEY])
