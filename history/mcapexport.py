@@ -19,6 +19,7 @@ from history.frames import frame_file
 from history.models import CameraFrame, Incident, Sample
 from history.storage import utc
 from robot import interface as ri
+from robot.link.dialect import to_robot
 
 CAMERA_TOPIC = "/camera"
 POSE_TOPIC = "/pose"
@@ -80,7 +81,10 @@ class JsonMcap:
 
     def add(self, topic: str, schema_name: str, t: float, message: Any, *, schema: dict[str, Any] | None = None,
             sequence: int = 0) -> None:
-        """``message`` at ``t`` (epoch seconds); without a ``schema``, one inferred from the first message."""
+        """``message`` at ``t`` (epoch seconds); without a ``schema``, a recorded message as the robot sent
+        it (``schema_name`` its type) and its schema inferred from the first one."""
+        if schema is None:
+            message = to_robot(schema_name, message)
         channel = self.channels.get((topic, schema_name))
         if channel is None:
             schema_id = self.writer.register_schema(name=schema_name, encoding="jsonschema",

@@ -9,6 +9,7 @@ messages are translated here, where they come in, so nothing above the link know
 from __future__ import annotations
 
 import base64
+import json
 from collections.abc import Callable
 from typing import Any
 
@@ -115,3 +116,53 @@ def to_model(ros: int, msg_type: str, msg: dict[str, Any]) -> dict[str, Any]:
     _stamps(msg)
     convert = _BY_TYPE.get(ri.ros1_spelling(msg_type))
     return convert(msg) if convert is not None else msg
+
+
+# --- back to the robot's own, for exports ----------------------------------------------------
+LOG_LEVEL_TO_ROS2 = {v: k for k, v in LOG_LEVEL_FROM_ROS2.items()}
+
+
+def _ros2_stamps(value: Any) -> None:
+    """``{secs, nsecs}`` -> ``{sec, nanosec}`` and headers without ``seq``, in place: ``_stamps`` undone."""
+    if isinstance(value, dict):
+        if "nsecs" in value and len(value) == 2 and "secs" in value:
+            value["sec"], value["nanosec"] = value.pop("secs"), value.pop("nsecs")
+            return
+        if "frame_id" in value and "stamp" in value:
+            value.pop("seq", None)
+        for item in value.values():
+            if isinstance(item, dict | list):
+                _ros2_stamps(item)
+    elif value and isinstance(value[0], dict | list):
+        for item in value:
+            _ros2_stamps(item)
+
+
+def _ros2_log(msg: dict[str, Any]) -> dict[str, Any]:
+    return {"stamp": (msg.get("header") or {}).get("stamp", {"secs": 0, "nsecs": 0}),
+            "level": LOG_LEVEL_TO_ROS2.get(int(msg.get("level", 2)), 20), "name": str(msg.get("name", "")).lstrip("/"),
+            "msg": msg.get("msg", ""), "file": msg.get("file", ""), "function": msg.get("function", ""),
+            "line": msg.get("line", 0)}
+
+
+def _ros2_particles(msg: dict[str, Any]) -> dict[str, Any]:
+    poses = msg.get("poses") or []
+    return {"header": msg.get("header", {}), "particles": [{"pose": p, "weight": 1.0 / len(poses)} for p in poses]}
+
+
+_TO_ROS2: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
+    "rcl_interfaces/Log": _ros2_log,
+    "nav2_msgs/ParticleCloud": _ros2_particles,
+}
+
+
+def to_robot(msg_type: str, msg: Any) -> Any:
+    """A message kept in the model as the robot that sent it has it, ``msg_type`` spelt its way: what an
+    export of a ROS 2 robot's recording holds (stamps, log levels, particles; goal ids stay the model's)."""
+    if not isinstance(msg, dict) or ri.ros1_spelling(msg_type) == msg_type:
+        return msg
+    convert = _TO_ROS2.get(ri.ros1_spelling(msg_type))
+    out = convert(msg) if convert is not None else dict(msg)
+    out = json.loads(json.dumps(out))  # a copy of our own to change in place
+    _ros2_stamps(out)
+    return out
