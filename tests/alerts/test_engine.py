@@ -13,16 +13,18 @@ from robot.alerts import engine as alerts_engine
 from robot.alerts.models import Alert
 from robot.alerts.services import alert_acknowledge
 from robot.live.groups import ALERTS_KEY
+from tests.conftest import EITHER_ROS
 from tests.helpers import async_wait_until, receive_until, ws_communicator
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
 
 @pytest.fixture
-def sim():
+def sim(request):
     from simulator.harness import SimThread
 
-    with SimThread(port=0, video_port=0, startup_s=0.5, battery_soc=0.08) as running:
+    ros = getattr(request, "param", 1)
+    with SimThread(port=0, video_port=0, startup_s=0.5, battery_soc=0.08, ros=ros) as running:
         yield running
 
 
@@ -44,7 +46,10 @@ async def alerts_frame(communicator, predicate, timeout=10.0) -> dict:
         timeout=timeout)
 
 
+@EITHER_ROS
 async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, viewer, operator):
+    # The robot's log: rosgraph_msgs/Log on ROS 1, rcl_interfaces/msg/Log (levels 10-50, no header) on ROS 2.
+    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     communicator = ws_communicator(viewer)
     assert (await communicator.connect(timeout=10))[0]
     await communicator.send_json_to({"action": "watch", "keys": [ALERTS_KEY]})

@@ -11,10 +11,12 @@ from robot import interface as ri
 from robot.introspection.tracking import track_smach
 from robot.live.groups import SMACH_ACTIVE_KEY
 from robot.models import AuditEntry
+from tests.conftest import EITHER_ROS
 from tests.helpers import wait_until
 from tests.introspection.test_tracking import leaves, stored
 
 
+@EITHER_ROS
 @pytest.mark.django_db(transaction=True)
 def test_an_event_offered_by_the_graph_goes_through_the_command_path(sim, link_thread, operator_api, viewer_api):
     tracker = asyncio.run_coroutine_threadsafe(track_smach(link_thread), link_thread.loop)

@@ -10,6 +10,7 @@ from robot import interface as ri
 from robot.introspection.tracking import track_diagnostics, track_smach
 from robot.live.groups import DIAGNOSTICS_KEY, SMACH_ACTIVE_KEY, SMACH_GRAPH_KEY
 from robot.live.state import get_store
+from tests.conftest import EITHER_ROS
 from tests.helpers import async_wait_until
 
 
@@ -22,7 +23,9 @@ def leaves() -> list[str]:
     return (stored(SMACH_ACTIVE_KEY) or {}).get("leaves", [])
 
 
+@EITHER_ROS
 async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link, sim):
+    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     task = asyncio.ensure_future(track_smach(link))
     try:
         # Each container publishes its own structure: the graph grows as they arrive.
@@ -44,7 +47,9 @@ async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link
         sim.call(lambda: sim.robot.fire("suspend"))  # back where the simulator started
 
 
+@EITHER_ROS
 async def test_without_introspection_state_change_tells_the_active_state(link, sim):
+    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     # fresh_s < 0: no container status ever counts, as on a robot without introspection.
     task = asyncio.ensure_future(track_smach(link, fresh_s=-1))
     try:
@@ -64,7 +69,9 @@ def _diagnostic(name: str, level: int, message: str) -> dict:
                                       "values": [{"key": "k", "value": message}]}]}
 
 
+@EITHER_ROS
 async def test_diagnostics_are_kept_by_component_and_a_level_change_shows_at_once(link, sim):
+    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     task = asyncio.ensure_future(track_diagnostics(link, refresh_s=30))
     topic = ri.topic("diagnostics").name
 
