@@ -61,11 +61,11 @@ def goal_view(goal: dict[str, Any] | None, statuses: dict[str, Any] | None) -> d
     ``foreign`` and no target: the status does not carry it). A goal the robot has not listed yet is pending."""
     foreign = _newest_foreign(statuses)
     if foreign and (not goal or foreign[1].get("since", foreign[1]["t"]) > goal["sent"]):
-        gid, reported = foreign
-        return {"id": gid, "action": reported.get("action", "move_base"), "x": None, "y": None, "yaw": None,
-                "location": None, "by": FOREIGN_GOAL_BY, "sent": reported.get("since", reported["t"]),
-                "cancel_requested": False, "foreign": True, "status": reported["state"],
-                "status_text": reported.get("text", ""), "finished": reported["state"] in TERMINAL_STATES}
+        gid, theirs = foreign
+        return {"id": gid, "action": theirs.get("action", "move_base"), "x": None, "y": None, "yaw": None,
+                "location": None, "by": FOREIGN_GOAL_BY, "sent": theirs.get("since", theirs["t"]),
+                "cancel_requested": False, "foreign": True, "status": theirs["state"],
+                "status_text": theirs.get("text", ""), "finished": theirs["state"] in TERMINAL_STATES}
     if not goal:
         return None
     reported = ((statuses or {}).get("goals") or {}).get(goal["id"])
