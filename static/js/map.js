@@ -218,9 +218,10 @@ function renderProgress(goal = currentGoal()) {
 function cancelText(result) {
   const goal = result.goal;
   if (!goal) return "Navigation stopped: no goal of ours was under way.";
-  const where = goal.foreign ? `sent by ${goal.by}` : goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`;
-  return goal.finished && !result.cancel_sent ? `The goal to ${where} had already ended (${goal.status}).`
-    : `Cancelling the goal to ${where}.`;
+  const which = goal.foreign ? `The goal ${goal.by} sent`
+    : `The goal to ${goal.location || `(${goal.x.toFixed(2)}, ${goal.y.toFixed(2)})`}`;
+  return goal.finished && !result.cancel_sent ? `${which} had already ended (${goal.status}).`
+    : `Cancelling ${which.charAt(0).toLowerCase()}${which.slice(1)}.`;
 }
 
 // --- commands --------------------------------------------------------------------------

@@ -132,3 +132,29 @@ def test_an_active_goal_shows_distance_and_time_left_and_its_cancel_says_where_n
     assert "cyborg_commander-" not in toast.inner_text()
     expect(page.locator("#goal-status")).to_have_text(re.compile("cancelled|aborted|succeeded"), timeout=15_000)
     expect(left).to_have_text("—")
+
+
+def test_a_goal_another_tool_sent_is_shown_as_such_and_its_cancel_stops_it(page, stack):
+    import roslibpy
+
+    from robot import interface as ri
+
+    open_map(page, stack, "otto")
+    start = robot_xy(page)
+    goal = max([(3.5, -1.0), (-3.5, -1.0)], key=lambda g: math.dist(g, start))
+    tool = roslibpy.Ros("127.0.0.1", stack.sim_port)
+    tool.run(timeout=10)
+    try:
+        name, msg_type = ri.action_topic("move_base", "goal", ri.ROS1)
+        target = {"position": {"x": goal[0], "y": goal[1], "z": 0.0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1.0}}
+        roslibpy.Topic(tool, name, msg_type).publish(roslibpy.Message({
+            "header": {"frame_id": ri.MAP_FRAME}, "goal_id": {"stamp": {"secs": 0, "nsecs": 0}, "id": "rviz-browser"},
+            "goal": {"target_pose": {"header": {"frame_id": ri.MAP_FRAME}, "pose": target}}}))
+        expect(page.locator("#goal-status")).to_have_text("active", timeout=15_000)
+        expect(page.locator("#goal-target")).to_have_text("sent by another tool")
+        expect(page.locator("#map-view")).to_have_attribute("data-goal-foreign", "1")
+        page.click("#goal-cancel")
+        expect(page.locator("#notices .notice").last).to_contain_text("Cancelling the goal another tool sent")
+        expect(page.locator("#goal-status")).to_have_text("cancelled", timeout=15_000)
+    finally:
+        tool.close()
