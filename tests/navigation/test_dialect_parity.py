@@ -69,8 +69,17 @@ def topic_list(topics: list[dict[str, Any]]) -> dict[str, Any]:
 
 def scenario(sim: SimThread, api) -> dict[str, Any]:
     answers: dict[str, Any] = {}
-    state = wait_until(lambda: (s := api.get("/api/robot/state/").json())["connected"]
-                       and all(k in s["values"] for k in STEADY_KEYS) and s, timeout=15, what="the robot's state")
+    # Messages with a header that arrived before the link found out the robot's ROS are as the robot sent
+    # them (the link reads a robot as ROS 1 until then): the state is read once each is newer.
+    found = time.time()
+
+    def ready(s: dict[str, Any]) -> bool:
+        values = s["values"]
+        return s["connected"] and all(k in values and ("header" not in values[k]["value"] or values[k]["t"] > found)
+                                      for k in STEADY_KEYS)
+
+    state = wait_until(lambda: (s := api.get("/api/robot/state/").json()) and ready(s) and s, timeout=15,
+                       what="the robot's state")
     answers["state"] = {"connected": state["connected"], "command_path": state["command_path"],
                         "link": normalised(state["link"]),
                         "values": {k: shape(state["values"][k]) for k in STEADY_KEYS},
