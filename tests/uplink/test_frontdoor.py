@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import time
 
-import pytest
 import roslibpy
 
 from robot import interface as ri
@@ -15,8 +14,6 @@ from tests.helpers import wait_until
 from tests.sim.support import Inbox
 from tests.stack import PASSWORD, Stack, free_port
 from tests.uplink.support import Agent
-
-pytestmark = pytest.mark.wiring  # as the other uplink tests
 
 ODOM, CMD_VEL = ri.topic("odom").name, ri.topic("cmd_vel").name
 FORWARD = {"linear": {"x": 0.3, "y": 0, "z": 0}, "angular": {"x": 0, "y": 0, "z": 0}}
