@@ -32,14 +32,19 @@ DEFAULT_MAX_BYTES: dict[str, int] = {"map": 64 * 1024 * 1024}
 
 
 def ensure_default_policies() -> int:
-    """Create the default policies that don't exist yet (never overrides an admin's choice)."""
+    """Create the default policies that don't exist yet, named and typed for the ROS the robot runs
+    (never overrides an admin's choice). A default kept with the other ROS's spelling of its type (the
+    same name on both, as ``/rosout``) takes this ROS's: the spelling is the robot's, not a choice."""
     created = 0
     for key, (mode, interval_s, retention_s) in DEFAULT_POLICIES.items():
         topic = ri.topic(key)
-        _, made = TopicPolicy.objects.get_or_create(
+        policy, made = TopicPolicy.objects.get_or_create(
             topic=topic.name,
             defaults={"msg_type": topic.type, "mode": mode, "interval_s": interval_s, "retention_s": retention_s,
                       "max_message_bytes": DEFAULT_MAX_BYTES.get(key)},
         )
         created += made
+        other_spellings = {ri.topic(key, ros).type for ros in ri.ROS_VERSIONS} - {topic.type}
+        if policy.msg_type in other_spellings:
+            TopicPolicy.objects.filter(pk=policy.pk).update(msg_type=topic.type)
     return created

@@ -26,6 +26,7 @@ from typing import Any, TypeGuard
 
 from django.conf import settings
 
+from history.defaults import ensure_default_policies
 from history.frames import Frame
 from history.incidents import BLACKBOX_KEYS
 from history.models import Mode
@@ -102,6 +103,7 @@ class Recorder:
         self._buffer: list[Taken] = []
         self._full: asyncio.Event | None = None
         self._subscribed_by_us: set[str] = set()
+        self._defaults_ros = ri.configured_ros() or ri.ROS1  # the ROS bootstrap made the default policies for
         self._reload_log = FailureLog("loading recording policies")
         self._write_log = FailureLog("writing recorded messages")
         self._retry: list[Item] = []
@@ -283,6 +285,11 @@ class Recorder:
                 log.warning("history: could not leave the recorder's watermark on stopping", exc_info=True)
 
     async def reload(self, link: Any) -> None:
+        ros = ri.ros_version()
+        if ros != self._defaults_ros and await self._reload_log.attempt(ensure_default_policies) is not None:
+            # The link found the robot runs another ROS than bootstrap assumed: its names and types.
+            self._defaults_ros = ros
+            self.blackbox_topics = frozenset(ri.topic(key).name for key in BLACKBOX_KEYS)
         policies = await self._reload_log.attempt(load_policies)
         if policies is None:
             return  # the previous policies stay in force

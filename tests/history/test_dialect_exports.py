@@ -63,3 +63,36 @@ async def test_the_robots_log_is_recorded_and_exported_as_the_robot_sent_it(reco
         assert set(exported["stamp"]) == {"sec", "nanosec"}
         assert set(json.loads(schema.data)["properties"]) == {"stamp", "level", "name", "msg", "file", "function",
                                                               "line"}
+
+
+@pytest.mark.parametrize("sim", [2], indirect=True, ids=["ros2"])
+async def test_a_ros2_robot_records_the_default_topics_under_its_own_names_and_types(recording, sim, link):
+    """Bootstrap makes the default policies before any link knows the robot's ROS, so with ROS 1's
+    names and types; once the link finds ROS 2, the recorder adds ROS 2's and takes the robot's type
+    for a topic both name alike (/rosout)."""
+    from history.defaults import DEFAULT_POLICIES
+    from history.models import TopicPolicy
+
+    def as_bootstrap_makes_them() -> None:
+        for key, (mode, interval_s, _) in DEFAULT_POLICIES.items():
+            topic = ri.topic(key, ri.ROS1)
+            TopicPolicy.objects.get_or_create(topic=topic.name, defaults={"msg_type": topic.type, "mode": mode,
+                                                                          "interval_s": interval_s})
+
+    await sync_to_async(as_bootstrap_makes_them)()
+    await async_wait_until(lambda: link.ros_version == ri.ROS2, timeout=10, what="the link to find ROS 2")
+    plan, status, rosout = (ri.topic(key, ri.ROS2) for key in ("plan", "move_base_status", "rosout"))
+    await async_wait_until(lambda: {plan.name, status.name} <= recording.periodic and rosout.name in recording.every
+                           and sim.subscription_count(status.name) > 0,
+                           what="the recorder to take ROS 2's default topics")
+    types = await sync_to_async(lambda: dict(TopicPolicy.objects.values_list("topic", "msg_type")))()
+    assert types[plan.name] == "nav_msgs/msg/Path" and types[status.name] == "action_msgs/msg/GoalStatusArray"
+    assert types[rosout.name] == "rcl_interfaces/msg/Log"
+
+    sim.call(lambda: sim.robot.rosout(8, "/move_base", "planner failed on ROS 2"))
+    recorded = sync_to_async(lambda: Sample.objects.filter(topic=rosout.name, msg_type=rosout.type,
+                                                           data__msg="planner failed on ROS 2").exists())
+    deadline = time.monotonic() + 15
+    while not await recorded():
+        assert time.monotonic() < deadline, "the log line was not recorded with the robot's type"
+        await asyncio.sleep(0.1)
