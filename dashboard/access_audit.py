@@ -106,18 +106,18 @@ def _roles_changed(sender: type, instance: Any, action: str, reverse: bool, pk_s
 def _roles_settle(user: Any, before: list[str]) -> None:
     """One entry per person and transaction: ``groups.set()`` removes, then adds."""
     pending = connection.__dict__.setdefault("_audit_roles_pending", {})
-    if not connection.run_on_commit:
-        pending.clear()  # a rolled-back transaction's: their records were dropped with it
-    if user.pk in pending:
-        return
-    pending[user.pk] = before
+    waiting = pending.get(user.pk)
+    if waiting is not None and any(entry[1] is waiting[1] for entry in connection.run_on_commit):
+        return  # this transaction's entry is still to be written
+    # (else: none, or a rolled-back transaction's, whose record was dropped with it)
 
     def record() -> None:
-        was, now = pending.pop(user.pk, before), _role_names(user)
+        was, now = pending.pop(user.pk, (before,))[0], _role_names(user)
         if was != now:
             _record("account.roles", {"username": user.get_username(), "from": was, "to": now},
                     f"roles of {user.get_username()}: {', '.join(now) or 'none'}")
 
+    pending[user.pk] = (before, record)
     transaction.on_commit(record)
 
 

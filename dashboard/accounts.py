@@ -56,28 +56,3 @@ def create_user(username: str, role: Role, *, password: str | None = None, email
     user.save()
     user.groups.set([groups[role]])
     return user, password
-
-
-def end_sessions_and_tokens(user: User) -> tuple[int, int]:
-    """Log ``user`` out everywhere at once: every session (their open sockets close) and every API
-    token. Returns how many of each ended."""
-    from django.contrib.sessions.models import Session
-    from rest_framework.authtoken.models import Token
-
-    from dashboard.revocation import sessions_ended
-
-    keys = session_keys_of(user)
-    Session.objects.filter(session_key__in=keys).delete()
-    tokens, _ = Token.objects.filter(user=user).delete()
-    sessions_ended(user.pk, keys)
-    return len(keys), tokens
-
-
-def session_keys_of(user: User) -> list[str]:
-    """The keys of ``user``'s sessions that still last (Django's store has no index by person: each is read)."""
-    from django.contrib.auth import SESSION_KEY
-    from django.contrib.sessions.models import Session
-    from django.utils import timezone
-
-    return [session.session_key for session in Session.objects.filter(expire_date__gt=timezone.now()).iterator()
-            if session.get_decoded().get(SESSION_KEY) == str(user.pk)]

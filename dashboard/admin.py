@@ -10,8 +10,8 @@ from django.contrib.auth.admin import UserAdmin
 from django.db.models import QuerySet
 from django.http import HttpRequest
 
-from dashboard.accounts import end_sessions_and_tokens
 from dashboard.models import SsoIdentity
+from dashboard.sessions import end_sessions_and_tokens
 from robot.commands.audit import audit_record
 
 User = get_user_model()

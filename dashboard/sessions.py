@@ -17,7 +17,6 @@ from django.http import HttpRequest, HttpResponseBase
 from django.utils import timezone
 from rest_framework import serializers
 
-from dashboard.accounts import session_keys_of
 from dashboard.models import SessionRecord
 from dashboard.revocation import sessions_ended
 
@@ -105,3 +104,21 @@ def sessions_end_others(*, user: Any, current_key: str) -> int:
     SessionRecord.objects.filter(session_key__in=keys).delete()
     sessions_ended(user.pk, sorted(keys))
     return len(keys)
+
+
+def end_sessions_and_tokens(user: Any) -> tuple[int, int]:
+    """Log ``user`` out everywhere at once: every session (their open sockets close) and every API
+    token. Returns how many of each ended."""
+    from rest_framework.authtoken.models import Token
+
+    keys = session_keys_of(user)
+    Session.objects.filter(session_key__in=keys).delete()
+    tokens, _ = Token.objects.filter(user=user).delete()
+    sessions_ended(user.pk, keys)
+    return len(keys), tokens
+
+
+def session_keys_of(user: Any) -> list[str]:
+    """The keys of ``user``'s sessions that still last (Django's store has no index by person: each is read)."""
+    return [session.session_key for session in Session.objects.filter(expire_date__gt=timezone.now()).iterator()
+            if session.get_decoded().get(SESSION_KEY) == str(user.pk)]
