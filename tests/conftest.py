@@ -335,7 +335,7 @@ def link_thread(sim, settings):
     settings.ROSBRIDGE_URL = sim.url
     runner = LinkThread()
     runner.start()
-    wait_until(lambda: runner.link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    wait_until(lambda: runner.link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     yield runner.link
     runner.stop()
 

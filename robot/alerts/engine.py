@@ -114,10 +114,8 @@ class AlertEngine:
             # Neither raised nor ended while starting: an outage handed over by the last raiser stays open.
             if not (starting and signal.key == "offline"):
                 self.apply(signal, now)
-        guard = link.guard
-        latched = bool(guard is not None and guard.latched)
-        by, at = link.last_press(now)
-        self.apply(rules.estop(latched=latched, by=by, at=at), now)
+        latch = link.latch_view(now)
+        self.apply(rules.estop(latched=latch.latched, by=latch.by, at=latch.at), now)
         # Offline or hung, every component would go stale: that is the link's alert, not theirs.
         if link.connected and link.responding:
             self._diagnostics(now)

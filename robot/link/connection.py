@@ -1,35 +1,33 @@
-"""The robot link: the one rosbridge connection per robot.
-
-roslibpy's Twisted transport delivers callbacks on the reactor thread. Inside Daphne that
-is the asyncio loop's own thread, and a topic message is handled right there, in the read that
-brought it; in ``manage.py robotlink`` and in tests the reactor is a thread of its own and every
-callback hops onto the asyncio loop with ``call_soon_threadsafe``. Nothing in a callback blocks.
-"""
+"""The robot link: the one rosbridge connection per robot, made of parts that each keep their own state
+and meet only here: ``dial`` (the connection and its liveness, ``robot.link.dial``), ``subscriptions``,
+``requests`` (``robot.link.serving``: the command bus, publishes and calls) and ``upkeep`` (its status),
+with ``latch``, what it knows of the E-STOP (``robot.link.status``)."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
-import threading
-import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from typing import Any
 
+import roslibpy
+
+from robot import interface as ri
+from robot.link.dial import Dial
 from robot.link.guard import CmdVelGuard
+from robot.link.lease import Lease
 from robot.link.liveness import watch_liveness
-from robot.link.rosclient import LinkRos, close_quietly
-from robot.link.serving import Serving
-from robot.link.subscriptions import REGISTRY_HOLDER, array_topics
+from robot.link.nav2 import Ros2Goals
+from robot.link.serving import Requests
+from robot.link.status import LatchView, LatchWatch, Upkeep
+from robot.link.subscriptions import Listener, Subscriptions, array_topics
 from robot.live import queues
-from robot.live.fanout import Coalescer
-from robot.supervisor import cancel_and_wait, supervise
+from robot.live.groups import LinkReply, LinkRequest, LinkStatus
+from robot.live.state import StateStore
+from robot.supervisor import Tasks, cancel_and_wait, supervise
 
 log = logging.getLogger(__name__)
-
-
-# After starting (a standby taking over), requests wait this long for the first connection instead of
-# being refused as "robot offline": a rolling restart of the links refuses nothing.
-FIRST_CONNECT_S = 3.0
 
 # Called with the link as it starts, before its first message (modules that listen to every topic).
 _start_hooks: list[Callable[[RobotLink], object]] = []
@@ -40,82 +38,163 @@ def register_start(hook: Callable[[RobotLink], object]) -> None:
         _start_hooks.append(hook)
 
 
-class RobotLink(Serving):
-    """One rosbridge connection: its start and stop here, on the layers of ``robot.link.core`` (its
-    state), ``status`` (status and upkeep), ``subscriptions`` and ``serving`` (requests)."""
+class RobotLink:
+    def __init__(
+        self,
+        url: str,
+        *,
+        store: StateStore,
+        layer: Any,
+        topics: Iterable[ri.Topic] | None = None,
+        max_backoff_s: float = 2.0,
+        service_timeout_s: float = 5.0,
+        guard_settings: dict[str, float] | None = None,
+        request_queue: str,
+        lease: Lease | None = None,
+    ) -> None:
+        self.store = store
+        self.layer = layer
+        self.dial = Dial(url, max_backoff_s=max_backoff_s)
+        self.nav2 = Ros2Goals(url, lambda: self.dial.ros, service_timeout_s)
+        self.latch = LatchWatch(store)
+        self.subscriptions = Subscriptions(self.dial, store=store, topics=topics, nav2=self.nav2,
+                                           service_timeout_s=service_timeout_s, spawn=self._spawn,
+                                           changed=self._changed)
+        self.requests = Requests(self.dial, self.latch, queue=request_queue, lease=lease, nav2=self.nav2,
+                                 service_timeout_s=service_timeout_s, owner=self, spawn=self._spawn)
+        self.upkeep = Upkeep(self.dial, self.subscriptions, self.latch, store=store,
+                             holder=lambda: self.requests.lease.holder if self.requests.lease else None)
+        self.listeners: list[Listener] = self.subscriptions.listeners
+        self._guard_settings = guard_settings or {"rate_hz": 10.0, "hold_s": 1.0, "deadman_s": 0.35}
+        self._tasks: list[asyncio.Task] = []
+        self._inflight = Tasks()
+
+    # --- the public face features use -------------------------------------------------
+
+    @property
+    def url(self) -> str:
+        return self.dial.url
+
+    @property
+    def ros(self) -> roslibpy.Ros | None:
+        return self.dial.ros
+
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop | None:
+        return self.dial.loop
+
+    @property
+    def connected(self) -> bool:
+        return self.dial.connected
+
+    @property
+    def since(self) -> float:
+        return self.dial.since
+
+    @property
+    def responding(self) -> bool:
+        return self.dial.responding
+
+    @property
+    def guard(self) -> CmdVelGuard | None:
+        return self.latch.guard
+
+    def latch_view(self, now: float) -> LatchView:
+        return self.latch.view(now)
+
+    def status(self) -> LinkStatus:
+        return self.upkeep.status()
+
+    def subscribe(self, name: str, msg_type: str, *, holder: str = "pinned") -> None:
+        self.subscriptions.subscribe(name, msg_type, holder=holder)
+
+    def unsubscribe(self, name: str, *, holder: str = "pinned") -> None:
+        self.subscriptions.unsubscribe(name, holder=holder)
+
+    @property
+    def subscribed(self) -> set[str]:
+        return self.subscriptions.subscribed
+
+    async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
+                   timeout: float | None = None) -> LinkReply:
+        return await self.requests.call(service, args, timeout=timeout)
+
+    async def execute(self, request: LinkRequest) -> LinkReply:
+        return await self.requests.execute(request)
+
+    async def answer(self, request: LinkRequest) -> LinkReply | None:
+        return await self.requests.answer(request)
+
+    def reconnect(self) -> None:
+        self.dial.reconnect()
+
+    def keep(self, task: asyncio.Task) -> asyncio.Task:
+        """A feature's long-running task that ends with this link (cancelled at its stop)."""
+        self._tasks.append(task)
+        return task
+
+    # --- start and stop ---------------------------------------------------------------
+
+    def _spawn(self, coro: Any) -> None:
+        self._inflight.start(coro)
+
+    def _changed(self) -> None:
+        self._spawn(self.upkeep.publish())
+
+    def _ready(self, at: float) -> None:
+        if self.dial.ready(at):
+            self.subscriptions.ready()
+            self._changed()
+
+    def _closed(self) -> None:
+        if self.dial.closed() and self.latch.guard is not None:
+            self.latch.guard.lost()
+        if not self.dial.stopped:
+            self._changed()
 
     async def start(self, *, serve_requests: bool = True) -> None:
-        from twisted.internet import reactor
-
-        self.loop = asyncio.get_running_loop()
-        self._loop_thread = threading.get_ident()
-        self.connecting_until = time.time() + FIRST_CONNECT_S
-        self._coalescer = Coalescer(self._send_update, loop=self.loop)
-        self.guard = CmdVelGuard(self._publish_zero, loop=self.loop, **self._guard_settings)
-        self.nav2.on_status = self._goal_status
-        await self._sync_latch()
+        self.latch.guard = CmdVelGuard(self.requests.publish_zero, loop=asyncio.get_running_loop(),
+                                       **self._guard_settings)
+        self.nav2.on_status = self.subscriptions.goal_status
+        await self.latch.sync()
+        self.dial.open(array_topics=array_topics(), on_reactor_ready=self.subscriptions.resubscribe,
+                       on_ready=self._ready, on_close=self._closed)
         for hook in _start_hooks:
             hook(self)
-        self.ros = LinkRos(self.url, array_topics=array_topics())  # connects (and later reconnects) by itself
-        self.ros.factory.maxDelay = self.max_backoff_s
-        self.ros.factory.initialDelay = 0.5
-        # The time is taken here, in the reactor's thread, so every message of the new connection
-        # (stamped there too) is later than `since`: what came before a robot restart is older.
-        self.ros.on("ready", self._resubscribe)
-        self.ros.on("ready", lambda *_: self._threadsafe(self._on_ready, time.time()))
-        self.ros.on("close", lambda *_: self._threadsafe(self._on_close))
-        if getattr(self.ros.factory, "_proto", None) is not None:
-            # With the reactor already running (a second link in a process, tests) the
-            # connection can open before the "ready" handler above was registered.
-            self._was_ready = True
-            self._threadsafe(self._on_ready, time.time())
-        if not reactor.running:
-            self.ros.factory.manager.run()  # a reactor thread of our own (not inside Daphne)
-        for t in self.topics:
-            self.subscribe(t.name, t.type, holder=REGISTRY_HOLDER)
-        self._tasks.append(supervise("link.heartbeat", self._heartbeat))
-        self._tasks.append(supervise("link.port-watch", self._watch_port))
-        self._tasks.append(supervise("link.liveness", lambda: watch_liveness(self)))
+        self.subscriptions.start()
+        self._tasks += [supervise("link.heartbeat", self.upkeep.heartbeat),
+                        supervise("link.port-watch", self.dial.watch_port),
+                        supervise("link.liveness", lambda: watch_liveness(self.dial, self.upkeep.publish))]
         if serve_requests:
-            self._serving = supervise("link.requests", self._serve)
-            self._tasks.append(self._serving)
-        await self.publish_status()
+            self.requests.serving = supervise("link.requests", self.requests.serve)
+            self._tasks.append(self.requests.serving)
+        await self.upkeep.publish()
 
     async def stop(self) -> None:
         """Stop within a few seconds whatever the network does (every wait is bounded)."""
-        self._stopped = True
-        if self._serving is not None:
+        self.dial.stopped = True
+        if (serving := self.requests.serving) is not None:
             try:
                 # Wake the loop's pop rather than cancel it: a cancelled list pop could lose the request it took.
-                await asyncio.wait_for(queues.push(self.request_queue, {"type": "link.stop"}), 1)
+                await asyncio.wait_for(queues.push(self.requests.request_queue, {"type": "link.stop"}), 1)
             except Exception:
                 log.warning("could not tell the robot link's request loop to stop; it stops after its current pop",
                             exc_info=True)
             # The loop ends at the stop message, or after its current pop (a Redis list pop returns
             # within a second) if another link on the list took the message: a request it took is
             # served. (asyncio.wait: however the loop ended, cancelled or failed, the stop goes on.)
-            _, running = await asyncio.wait({self._serving}, timeout=queues.POP_TIMEOUT_S + 1)
+            _, running = await asyncio.wait({serving}, timeout=queues.POP_TIMEOUT_S + 1)
             if running:
                 log.warning("robot link request loop did not stop in time")
         await self._inflight.wait(2)  # answer what it took while the robot is there
-        if self._coalescer is not None:
-            self._tasks.append(self._coalescer.close())
+        if (sending := self.subscriptions.stop()) is not None:
+            self._tasks.append(sending)
         await asyncio.gather(cancel_and_wait(self._tasks, 2), self._inflight.close(2))
         self._tasks.clear()
         self.nav2.close()
-        if self.guard is not None:
-            self.guard.stop()  # zero before the connection goes, if the robot may be moving
-        if self.ros is not None:
-            ros, self.ros = self.ros, None
-            for topic in list(self._subscriptions.values()):
-                topic.reconnect_on_close = False
-            ros.factory.stopTrying()
-            if ros.is_connected:
-                try:
-                    await asyncio.wait_for(asyncio.get_running_loop().run_in_executor(None, close_quietly, ros), 3)
-                except TimeoutError:
-                    log.warning("the rosbridge connection did not close in time; going on")
-        self.connected = False
+        if self.latch.guard is not None:
+            self.latch.guard.stop()  # zero before the connection goes, if the robot may be moving
+        await self.dial.close()
 
 
 def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
@@ -129,5 +208,3 @@ def one_per_link[T](make: Callable[[RobotLink], T]) -> Callable[[RobotLink], T]:
         return found
 
     return of
-
-

@@ -88,7 +88,7 @@ async def probe_command_path(link: RobotLink) -> None:
     """Ping the link over the request channel every web process uses, and say what it found
     in the link's status: a dead request loop or channel layer shows as "command path down"."""
     while True:
-        await link.set_command_path(await aping_over_queue(PROBE_TIMEOUT_S))
+        await link.upkeep.set_command_path(await aping_over_queue(PROBE_TIMEOUT_S))
         await asyncio.sleep(PROBE_INTERVAL_S)
 
 

@@ -18,16 +18,14 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from typing import TYPE_CHECKING
+from collections.abc import Awaitable, Callable
 
 from django.conf import settings
 
 from robot import interface as ri
+from robot.link.dial import Dial
 from robot.link.rosclient import call_service
 from robot.supervisor import spawn
-
-if TYPE_CHECKING:
-    from robot.link.status import Upkeep
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +43,7 @@ def judge(*, connected: bool, heard_at: float, now: float, hang: float) -> bool:
     return not connected or now - heard_at < hang
 
 
-async def _probe(link: Upkeep) -> bool:
+async def _probe(link: Dial) -> bool:
     """Whether the probe went unanswered (a failed call is an answer: rosapi may be gone)."""
     if link.ros is None:
         return False
@@ -56,7 +54,7 @@ async def _probe(link: Upkeep) -> bool:
     return reply.get("error_code") == "timeout"
 
 
-async def watch_liveness(link: Upkeep) -> None:
+async def watch_liveness(link: Dial, changed: Callable[[], Awaitable[None]]) -> None:
     probe: asyncio.Task | None = None
     probed_at = 0.0
     unanswered = 0
@@ -83,7 +81,7 @@ async def watch_liveness(link: Upkeep) -> None:
                 else:
                     log.error("the robot at %s is not responding: nothing heard for %.1f s", link.url,
                               now - link.heard_at)
-                await link.publish_status()
+                await changed()
     finally:
         if probe is not None:
             probe.cancel()

@@ -10,20 +10,25 @@ from collections.abc import Awaitable, Callable
 from typing import Any, cast
 
 from robot import interface as ri
-from robot.link.core import RECONNECT_INTERVAL_S
+from robot.link.dial import Dial
 from robot.link.guard import RELEASE_FIRST
-from robot.link.rosclient import call_service
-from robot.link.subscriptions import Subscriptions
+from robot.link.lease import Lease
+from robot.link.nav2 import Ros2Goals
+from robot.link.rosclient import Publishers, call_service
+from robot.link.status import LatchWatch
 from robot.live import queues
 from robot.live.groups import LinkReply, LinkRequest
 
 log = logging.getLogger(__name__)
 
+# Between two reconnects asked for (the pages' button, the API): more often only flaps the link,
+# and a flapping link cannot carry an E-STOP.
+RECONNECT_INTERVAL_S = 5.0
 REPLY_MARGIN_S = 0.3
 _NO_ROBOT_NEEDED = frozenset({"ping", "reconnect", "estop_release"})  # answered at once
 
 # Extra link operations other modules add (e.g. robot/audio/link.py): (link, request) -> reply,
-# the link being the whole RobotLink (robot.link.connection), which is built on this layer.
+# the link being the whole RobotLink (robot.link.connection), which holds this part.
 Operation = Callable[[Any, LinkRequest], Awaitable[LinkReply]]
 _operations: dict[str, Operation] = {}
 
@@ -32,17 +37,35 @@ def register_operation(op: str, operation: Operation) -> None:
     _operations[op] = operation
 
 
-class Serving(Subscriptions):
-    async def _serve(self) -> None:
-        while not self._stopped:
+class Requests:
+    """What the link is asked to do, and the last checks before the robot."""
+
+    def __init__(self, dial: Dial, latch: LatchWatch, *, queue: str, lease: Lease | None, nav2: Ros2Goals,
+                 service_timeout_s: float, owner: object, spawn: Callable[[Any], object]) -> None:
+        self.dial = dial
+        self.latch = latch
+        self.request_queue = queue  # requests arrive on this queue (robot.live.queues)
+        # Scaled mode: the Redis lease this link holds; it publishes only while the lease is still its own.
+        self.lease = lease
+        self.nav2 = nav2
+        self.service_timeout_s = service_timeout_s
+        self.owner = owner  # what registered operations are given (the whole link)
+        self._spawn = spawn
+        self.serving: asyncio.Future | None = None
+        self._publishers = Publishers()
+        self._in_order = asyncio.Lock()  # publishes one at a time through the fencing check
+        self._asked_reconnect_at = -RECONNECT_INTERVAL_S  # monotonic
+
+    async def serve(self) -> None:
+        while not self.dial.stopped:
             request = await queues.pop(self.request_queue)
             if request is None:
                 continue
             if request.get("type") == "link.stop":
-                if self._stopped:
+                if self.dial.stopped:
                     return
                 continue  # a stale stop message from an earlier link
-            self._spawn(self._handle(cast(LinkRequest, request)))
+            self._spawn(self.handle(cast(LinkRequest, request)))
 
     async def answer(self, request: LinkRequest) -> LinkReply | None:
         """``execute`` for a request that came from another process; None if it came too late."""
@@ -52,12 +75,12 @@ class Serving(Subscriptions):
             return None
         # A link just started (a standby taking over) serves requests queued meanwhile once connected,
         # or still says "offline" in time for the caller to hear it.
-        while (not self.connected and request.get("op") not in _NO_ROBOT_NEEDED
-               and time.time() < min(deadline - REPLY_MARGIN_S, self.connecting_until)):
+        while (not self.dial.connected and request.get("op") not in _NO_ROBOT_NEEDED
+               and time.time() < min(deadline - REPLY_MARGIN_S, self.dial.connecting_until)):
             await asyncio.sleep(0.02)
         return await self.execute(request)
 
-    async def _handle(self, request: LinkRequest) -> None:
+    async def handle(self, request: LinkRequest) -> None:
         reply = await self.answer(request)
         if reply is None:
             return
@@ -73,22 +96,23 @@ class Serving(Subscriptions):
                 return {"ok": False, "error_code": "throttled",
                         "error": f"The robot link reconnected moments ago; try again in {max(1, round(wait))} s."}
             self._asked_reconnect_at = time.monotonic()
-            self.reconnect()
+            self.dial.reconnect()
             return {"ok": True}
         if op == "ping":
             return {"ok": True}
         if op in _operations:
-            return await _operations[op](self, request)
+            return await _operations[op](self.owner, request)
+        guard = self.latch.guard
         if op == "estop_release":
-            if self.guard is not None:
-                self.guard.release()
+            if guard is not None:
+                guard.release()
             return {"ok": True}
-        if op == "estop" and self.guard is not None:
-            self.guard.engage()  # latched even when the robot is offline
-            self._pressed_at = max(self._pressed_at, float(request.get("at") or time.time()))
-            self._pressed_by = str(request.get("by") or self._pressed_by)
-        if not self.connected or self.ros is None or not self.ros.is_connected:
-            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if op == "estop" and guard is not None:
+            guard.engage()  # latched even when the robot is offline
+            self.latch.pressed(float(request.get("at") or time.time()), str(request.get("by") or ""))
+        ros = self.dial.ros
+        if not self.dial.connected or ros is None or not ros.is_connected:
+            return _offline(self.dial.url)
         if op == "publish" and self.lease is not None and not request.get("emergency"):
             # One at a time through the fencing check's round trip to Redis, in the order they came:
             # a driver's last Twist must not overtake the zero sent after it.
@@ -111,10 +135,11 @@ class Serving(Subscriptions):
             refused = self._held_back(request, request["topic"], request["msg"])
             if refused:
                 return refused
-            if self.ros_version == ri.ROS2 and (routed := await self.nav2.publish(request["topic"], request["msg"])):
+            routed = self.dial.ros_version == ri.ROS2 and await self.nav2.publish(request["topic"], request["msg"])
+            if routed:
                 return routed
-            assert self.ros is not None
-            self._publishers.publish(self.ros, request["topic"], request["msg_type"], request["msg"])
+            assert self.dial.ros is not None
+            self._publishers.publish(self.dial.ros, request["topic"], request["msg_type"], request["msg"])
             return {"ok": True}
         if op == "call_service":
             return await self._call_service(request)
@@ -130,27 +155,28 @@ class Serving(Subscriptions):
 
     def _held_back(self, request: LinkRequest, name: str, msg: dict[str, Any]) -> LinkReply | None:
         """The last check before the robot: the latch, on every publish and service call."""
-        if self.guard is None:
+        if self.latch.guard is None:
             return None
-        refusal = self.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")),
+        refusal = self.latch.guard.check_publish(name, msg, by_the_stop=bool(request.get("stopping")),
                                            fresh_press=bool(request.get("fresh_press")))
         if refusal is None:
             return None
         return {"ok": False, "error_code": "release_first" if refusal == RELEASE_FIRST else "estop", "error": refusal}
 
-    def _publish_zero(self) -> None:
-        if self.ros is None or not self.ros.is_connected:
+    def publish_zero(self) -> None:
+        ros = self.dial.ros
+        if ros is None or not ros.is_connected:
             raise RuntimeError("robot offline")
         if self.lease is not None and not self.lease.may_stop:
             raise RuntimeError("this robot link no longer holds the lease")
         cmd_vel = ri.topic("cmd_vel")
-        self._publishers.publish(self.ros, cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
+        self._publishers.publish(ros, cmd_vel.name, cmd_vel.type, ri.ZERO_TWIST)
 
     async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
                    timeout: float | None = None) -> LinkReply:
         """Call one of the robot's services from where the link runs (never blocks the loop)."""
-        if not self.connected or self.ros is None:
-            return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {self.url}"}
+        if not self.dial.connected or self.dial.ros is None:
+            return _offline(self.dial.url)
         request: LinkRequest = {"service": service.name, "service_type": service.type, "args": args or {}}
         if timeout is not None:
             request["timeout"] = timeout
@@ -160,7 +186,11 @@ class Serving(Subscriptions):
         refused = self._held_back(request, request["service"], request.get("args") or {})
         if refused:
             return refused
-        assert self.ros is not None
+        assert self.dial.ros is not None
         timeout = float(request.get("timeout") or self.service_timeout_s)
-        return await call_service(self.ros, request["service"], request["service_type"], request.get("args") or {},
+        return await call_service(self.dial.ros, request["service"], request["service_type"], request.get("args") or {},
                                   timeout)
+
+
+def _offline(url: str) -> LinkReply:
+    return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {url}"}

@@ -163,9 +163,9 @@ def test_a_robot_that_was_connected_is_offline_after_the_blink_grace():
 
     link = RobotLink("ws://127.0.0.1:9", store=get_store(), layer=None, request_queue="unused")
     engine = alerts_engine.AlertEngine(link)
-    link.connected = True
+    link.dial.connected = True
     engine.tick(1_000_000.0)
-    link.connected = False
+    link.dial.connected = False
     engine.tick(1_000_001.0)
     assert not _offline_on(engine)
     engine.tick(1_000_001.0 + alerts_engine.OFFLINE_GRACE_S + 0.5)

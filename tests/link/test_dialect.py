@@ -43,7 +43,7 @@ async def test_the_link_finds_out_the_ros_and_shows_it_in_status_and_health(link
     from dashboard.health import health_report
     from robot.live.state import link_status
 
-    await async_wait_until(lambda: link_either.ros_version == ros, timeout=10, what=f"the link to find ROS {ros}")
+    await async_wait_until(lambda: link_either.dial.ros_version == ros, timeout=10, what=f"the link to find ROS {ros}")
     assert ri.ros_version() == ros
     await async_wait_until(lambda: link_status().get("ros") == ros, timeout=10, what="the status to say it")
     report = await asyncio.get_running_loop().run_in_executor(None, health_report)
@@ -54,14 +54,14 @@ async def test_finding_out_the_ros_leaves_no_error_on_a_ros1_robots_log(sim, set
     settings.ROBOT_ROS = "auto"
     async for hosted in hosted_link(sim.url, settings):
         await asyncio.sleep(1.0)  # the probe is asked at once on connect; its log line would follow it
-        assert hosted.ros_version == ri.ROS1
+        assert hosted.dial.ros_version == ri.ROS1
         assert not [m for m in await _stored_logs() if "get_ros_version" in str(m.get("msg"))]
 
 
 async def test_log_lines_and_stamps_reach_the_product_in_one_model(link_either, sim_either, ros):
     from robot.live.announce import aget_state
 
-    await async_wait_until(lambda: link_either.ros_version == ros, timeout=10, what="the ROS found out")
+    await async_wait_until(lambda: link_either.dial.ros_version == ros, timeout=10, what="the ROS found out")
     loop = asyncio.get_running_loop()
 
     async def logged() -> list[dict]:

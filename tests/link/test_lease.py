@@ -76,7 +76,7 @@ async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, le
     a, b = leases("link-a"), leases("link-b")
     await asyncio.wait_for(a.acquire(), DEADLINE_S)
     renewing = asyncio.ensure_future(a.hold())
-    link.lease = a
+    link.requests.lease = a
     speech = ri.topic("text_to_speech")
     request = {"op": "publish", "topic": speech.name, "msg_type": speech.type}
 
@@ -89,7 +89,7 @@ async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, le
     assert not reply["ok"] and "lost its lease" in reply["error"]
     await asyncio.sleep(0.5)
     assert {"data": "after losing it"} not in sim.received(speech.name)
-    link.lease = None
+    link.requests.lease = None
     await asyncio.wait_for(renewing, DEADLINE_S)  # the renewal finds the other token and gives up too
 
 

@@ -105,8 +105,8 @@ async def test_it_drops_requests_that_reach_the_link_after_their_deadline(link, 
 
     reply = await link.execute({"op": "publish", "topic": "/x", "msg_type": "std_msgs/String", "msg": {}})
     assert reply["ok"] is True  # sanity: executes when on time
-    await link._handle({"op": "publish", "topic": ri.topic("register_event").name, "msg_type": "std_msgs/String",
-                        "msg": {"data": "late"}, "deadline": time.time() - 1})
+    await link.requests.handle({"op": "publish", "topic": ri.topic("register_event").name,
+                                "msg_type": "std_msgs/String", "msg": {"data": "late"}, "deadline": time.time() - 1})
     await asyncio.sleep(0.3)
     assert sim.robot.received_count(ri.topic("register_event").name) == 0
 
@@ -178,8 +178,8 @@ async def test_it_turns_nagle_off_on_the_rosbridge_socket(link):
 async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_every_reconnect(link, sim):
     link.subscribe("/lidar/points", "velodyne_msgs/VelodyneScan")  # a package the robot does not have
 
-    await async_wait_until(lambda: "/lidar/points" in link.failed_subscriptions, timeout=10, what="the refusal")
-    assert "velodyne_msgs" in link.failed_subscriptions["/lidar/points"]
+    await async_wait_until(lambda: "/lidar/points" in link.subscriptions.failed, timeout=10, what="the refusal")
+    assert "velodyne_msgs" in link.subscriptions.failed["/lidar/points"]
     assert "/lidar/points" in link.status()["failed_subscriptions"]
     # What /healthz lists (dashboard.health reads the link's status from the store).
     await async_wait_until(lambda: "/lidar/points" in (link_status().get("failed_subscriptions") or {}),
@@ -187,7 +187,7 @@ async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_e
 
     before = link.since
     link.reconnect()
-    await async_wait_until(lambda: link.since > before and "/lidar/points" in link.failed_subscriptions,
+    await async_wait_until(lambda: link.since > before and "/lidar/points" in link.subscriptions.failed,
                            timeout=15, what="the subscription tried (and refused) again after the reconnect")
 
 
@@ -195,21 +195,21 @@ async def test_a_message_read_on_the_loops_own_thread_is_handled_in_that_read(li
     # Inside Daphne the reactor is the event loop's thread: no hop through call_soon_threadsafe.
     seen = []
     link.listeners.append(lambda name, msg_type, msg, t: seen.append((name, threading.get_ident())))
-    link._received("/not_in_the_registry", "std_msgs/String", {"data": "x"})
+    link.subscriptions.received("/not_in_the_registry", "std_msgs/String", {"data": "x"})
     assert ("/not_in_the_registry", threading.get_ident()) in seen
 
     def broken(topic, msg, t):
         raise ValueError("bad message")
 
     monkeypatch.setitem(subscriptions._handlers, BATTERY, broken)
-    link._received(ri.topic(BATTERY).name, ri.topic(BATTERY).type, {"data": 0.5})  # logged, never raised
+    link.subscriptions.received(ri.topic(BATTERY).name, ri.topic(BATTERY).type, {"data": 0.5})  # logged, never raised
     assert "handling a message on /" in caplog.text
 
 
 async def test_a_message_read_on_another_thread_is_handled_on_the_loop(link):
     seen = []
     link.listeners.append(lambda name, msg_type, msg, t: seen.append((name, threading.get_ident())))
-    reader = threading.Thread(target=link._received, args=("/not_in_the_registry", "std_msgs/String", {}))
+    reader = threading.Thread(target=link.subscriptions.received, args=("/not_in_the_registry", "std_msgs/String", {}))
     reader.start()
     reader.join()
     await async_wait_until(lambda: ("/not_in_the_registry", threading.get_ident()) in seen)
@@ -219,9 +219,9 @@ async def test_a_message_read_on_another_thread_is_handled_on_the_loop(link):
 async def test_it_stops_cleanly_when_its_request_loop_was_cancelled(link, sim):
     """A Redis freeze once left the request loop cancelled, and the stop then ended on its
     CancelledError: the link process exited without zeroing, closing or handing back its lease."""
-    link._serving.cancel()
+    link.requests.serving.cancel()
     with contextlib.suppress(asyncio.CancelledError):
-        await link._serving
+        await link.requests.serving
     await asyncio.wait_for(link.stop(), 10)  # returns, and raises nothing
     assert link.ros is None and not link.connected
 
@@ -244,7 +244,7 @@ async def test_publishes_reach_the_robot_in_the_order_they_came_whatever_the_fen
     cmd_vel = ri.topic("cmd_vel")
     moving = {"linear": {"x": 0.5, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
     zero = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
-    link.lease = _SlowThenFastLease()
+    link.requests.lease = _SlowThenFastLease()
     try:
         before = sim.robot.received_count(cmd_vel.name)
         replies = await asyncio.gather(*(link.execute({"op": "publish", "topic": cmd_vel.name, "msg_type": cmd_vel.type,
@@ -252,5 +252,5 @@ async def test_publishes_reach_the_robot_in_the_order_they_came_whatever_the_fen
         assert all(r["ok"] for r in replies), replies
         await async_wait_until(lambda: sim.robot.received_count(cmd_vel.name) == before + 2, timeout=5)
     finally:
-        link.lease = None
+        link.requests.lease = None
     assert ri.is_zero_twist(sim.received(cmd_vel.name)[-1])  # the driver's zero came last, as sent

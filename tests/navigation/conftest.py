@@ -41,7 +41,7 @@ def linked(sim, settings):
     runner.start()
     tracker = asyncio.run_coroutine_threadsafe(track_goal_statuses(runner.link), runner.loop)
     try:
-        wait_until(lambda: runner.link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+        wait_until(lambda: runner.link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
         wait_until(lambda: stored(MAP_META_KEY), timeout=10, what="the map to be rendered")
         yield runner.link
     finally:
