@@ -95,7 +95,8 @@ class BlackBox:
                     if time.monotonic() >= next_adopt:
                         next_adopt = time.monotonic() + ADOPT_EVERY_S
                         for name, msg_type in self.topics.items():
-                            link.subscribe(name, msg_type, holder=LINK_HOLDER)  # again each second: a no-op once held
+                            # again each second: a no-op once held
+                            link.subscriptions.subscribe(name, msg_type, holder=LINK_HOLDER)
                         await self.adopt_open()
                     failures.ok()
                 except Exception:
@@ -105,7 +106,7 @@ class BlackBox:
             if self.offer in link.listeners:
                 link.listeners.remove(self.offer)
             for name in self.topics:
-                link.unsubscribe(name, holder=LINK_HOLDER)
+                link.subscriptions.unsubscribe(name, holder=LINK_HOLDER)
 
 
 async def run_blackbox(link: Any) -> None:

@@ -271,7 +271,7 @@ class Recorder:
                     pass
                 self._full.clear()
                 if hasattr(link, "connected"):
-                    self._buffer.extend(self.sessions.note(connected=link.connected, since=link.since,
+                    self._buffer.extend(self.sessions.note(connected=link.connected, since=link.dial.since,
                                                            now=time.time()))
                 await self.flush()
                 await self.publish_watermark(link.store)
@@ -303,10 +303,10 @@ class Recorder:
         self.apply(policies)
         wanted = {p.topic: p.msg_type for p in policies.values() if p.mode != Mode.OFF and p.msg_type}
         for name, msg_type in wanted.items():
-            link.subscribe(name, msg_type, holder=LINK_HOLDER)
+            link.subscriptions.subscribe(name, msg_type, holder=LINK_HOLDER)
             self._subscribed_by_us.add(name)
         for name in self._subscribed_by_us - set(wanted):
-            link.unsubscribe(name, holder=LINK_HOLDER)
+            link.subscriptions.unsubscribe(name, holder=LINK_HOLDER)
             self._subscribed_by_us.discard(name)
 
     async def publish_watermark(self, store: Any) -> None:

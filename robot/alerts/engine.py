@@ -110,14 +110,14 @@ class AlertEngine:
         offline_for = now - (self.offline_since or now)
         starting = not self.ever_connected and offline_for < FIRST_CONNECT_GRACE_S
         for signal in rules.link(connected=link.connected, offline_for=offline_for,
-                                 responding=link.responding, grace_s=OFFLINE_GRACE_S):
+                                 responding=link.dial.responding, grace_s=OFFLINE_GRACE_S):
             # Neither raised nor ended while starting: an outage handed over by the last raiser stays open.
             if not (starting and signal.key == "offline"):
                 self.apply(signal, now)
         latch = link.latch_view(now)
         self.apply(rules.estop(latched=latch.latched, by=latch.by, at=latch.at), now)
         # Offline or hung, every component would go stale: that is the link's alert, not theirs.
-        if link.connected and link.responding:
+        if link.connected and link.dial.responding:
             self._diagnostics(now)
         for change in self.book.expire(now):
             self.changed(change)

@@ -102,11 +102,11 @@ class Listeners:
     def sweep(self) -> None:
         self.leases.expire()
         if self.leases:
-            if self.topic.name not in self.link.subscribed:
+            if self.topic.name not in self.link.subscriptions.subscribed:
                 self.decoder = None  # a new stream
-            self.link.subscribe(self.topic.name, self.topic.type, holder=HOLDER)
+            self.link.subscriptions.subscribe(self.topic.name, self.topic.type, holder=HOLDER)
         else:
-            self.link.unsubscribe(self.topic.name, holder=HOLDER)
+            self.link.subscriptions.unsubscribe(self.topic.name, holder=HOLDER)
 
 
 listeners_of = one_per_link(Listeners)
@@ -128,10 +128,10 @@ async def _listen(link: RobotLink, request: LinkRequest) -> LinkReply:
 
 
 async def _declare(link: RobotLink, request: LinkRequest) -> LinkReply:
-    if not link.connected or link.ros is None:
-        return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {link.url}"}
+    if not link.connected or link.dial.ros is None:
+        return {"ok": False, "error_code": "offline", "error": f"Robot offline: no connection to {link.dial.url}"}
     info = ri.topic("speaker_info")
-    topic = roslibpy.Topic(link.ros, info.name, info.type, latch=True)
+    topic = roslibpy.Topic(link.dial.ros, info.name, info.type, latch=True)
     topic.publish(roslibpy.Message(ri.speaker_info()))
     return {"ok": True}
 

@@ -157,8 +157,8 @@ async def arequest(op: str, *, timeout: float | None = None, **fields: Any) -> L
         # asyncio.timeout, not wait_for: wait_for runs the request as a task of its own, a loop
         # turn later (a command would wait for it before anything is sent).
         async with asyncio.timeout(timeout):
-            if hosted is not None and hosted.loop is not None and not hosted.loop.is_closed():
-                if refusal := _not_responding(request, responding=hosted.responding or not hosted.connected):
+            if hosted is not None and hosted.dial.loop is not None and not hosted.dial.loop.is_closed():
+                if refusal := _not_responding(request, responding=hosted.dial.responding or not hosted.connected):
                     raise refusal
                 reply = await _in_process(hosted, request)
             else:
@@ -189,10 +189,10 @@ async def _to_link_process(request: LinkRequest, timeout: float) -> LinkReply:
 
 async def _in_process(hosted: RobotLink, request: LinkRequest) -> LinkReply:
     """The link lives in this process (embedded default): no queue hop."""
-    if asyncio.get_running_loop() is hosted.loop:
-        return await hosted.execute(request)
-    assert hosted.loop is not None  # set when the link starts, before it is hosted
-    future = asyncio.run_coroutine_threadsafe(hosted.execute(request), hosted.loop)
+    if asyncio.get_running_loop() is hosted.dial.loop:
+        return await hosted.requests.execute(request)
+    assert hosted.dial.loop is not None  # set when the link starts, before it is hosted
+    future = asyncio.run_coroutine_threadsafe(hosted.requests.execute(request), hosted.dial.loop)
     return await asyncio.wrap_future(future)
 
 

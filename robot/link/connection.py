@@ -11,8 +11,6 @@ import weakref
 from collections.abc import Callable, Iterable
 from typing import Any
 
-import roslibpy
-
 from robot import interface as ri
 from robot.link.dial import Dial
 from robot.link.guard import CmdVelGuard
@@ -23,7 +21,6 @@ from robot.link.serving import Requests
 from robot.link.status import LatchView, LatchWatch, Upkeep
 from robot.link.subscriptions import Listener, Subscriptions, array_topics
 from robot.live import queues
-from robot.live.groups import LinkReply, LinkRequest, LinkStatus
 from robot.live.state import StateStore
 from robot.supervisor import Tasks, cancel_and_wait, supervise
 
@@ -69,64 +66,14 @@ class RobotLink:
         self._tasks: list[asyncio.Task] = []
         self._inflight = Tasks()
 
-    # --- the public face features use -------------------------------------------------
-
-    @property
-    def url(self) -> str:
-        return self.dial.url
-
-    @property
-    def ros(self) -> roslibpy.Ros | None:
-        return self.dial.ros
-
-    @property
-    def loop(self) -> asyncio.AbstractEventLoop | None:
-        return self.dial.loop
+    # --- what features use beside the parts ---------------------------------------------
 
     @property
     def connected(self) -> bool:
         return self.dial.connected
 
-    @property
-    def since(self) -> float:
-        return self.dial.since
-
-    @property
-    def responding(self) -> bool:
-        return self.dial.responding
-
-    @property
-    def guard(self) -> CmdVelGuard | None:
-        return self.latch.guard
-
     def latch_view(self, now: float) -> LatchView:
         return self.latch.view(now)
-
-    def status(self) -> LinkStatus:
-        return self.upkeep.status()
-
-    def subscribe(self, name: str, msg_type: str, *, holder: str = "pinned") -> None:
-        self.subscriptions.subscribe(name, msg_type, holder=holder)
-
-    def unsubscribe(self, name: str, *, holder: str = "pinned") -> None:
-        self.subscriptions.unsubscribe(name, holder=holder)
-
-    @property
-    def subscribed(self) -> set[str]:
-        return self.subscriptions.subscribed
-
-    async def call(self, service: ri.Service, args: dict[str, Any] | None = None, *,
-                   timeout: float | None = None) -> LinkReply:
-        return await self.requests.call(service, args, timeout=timeout)
-
-    async def execute(self, request: LinkRequest) -> LinkReply:
-        return await self.requests.execute(request)
-
-    async def answer(self, request: LinkRequest) -> LinkReply | None:
-        return await self.requests.answer(request)
-
-    def reconnect(self) -> None:
-        self.dial.reconnect()
 
     def keep(self, task: asyncio.Task) -> asyncio.Task:
         """A feature's long-running task that ends with this link (cancelled at its stop)."""

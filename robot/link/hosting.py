@@ -63,7 +63,7 @@ async def start_link(
     hold(link)
     tasks = [supervise("link.command-path", functools.partial(probe_command_path, link))]
     if not embedded and direct.enabled():
-        tasks.append(supervise("link.direct", functools.partial(direct.serve, link.answer)))
+        tasks.append(supervise("link.direct", functools.partial(direct.serve, link.requests.answer)))
     tasks += [
         supervise(f"background.{name}", functools.partial(service, link))
         for name, service, embedded_only in _background

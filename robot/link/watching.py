@@ -92,8 +92,8 @@ class Watches:
         # front-door tool watching it after it came gets it at once, as from the robot's rosbridge.
         self.latched: dict[str, TopicUpdate] = {}
         self._listing: tuple[float, list[dict[str, Any]]] | None = None
-        assert link.loop is not None
-        self.coalescer = Coalescer(self._send, loop=link.loop)
+        assert link.dial.loop is not None
+        self.coalescer = Coalescer(self._send, loop=link.dial.loop)
         link.listeners.append(self.offer)
         link.keep(supervise("link.topic-watch", self._sweep_forever))
 
@@ -140,7 +140,7 @@ class Watches:
     def _lease(self, table: Leases, name: str, msg_type: str, holder: str) -> None:
         table.renew(name, holder)
         self.idle_since.pop(name, None)
-        self.link.subscribe(name, msg_type, holder=HOLDER)
+        self.link.subscriptions.subscribe(name, msg_type, holder=HOLDER)
 
     @staticmethod
     def _registry_topics(keys: list[str], refused: dict[str, dict[str, str]]) -> dict[str, str]:
@@ -166,7 +166,7 @@ class Watches:
         known = self.types.get(name)
         if known:
             return known
-        reply = await self.link.call(ri.service("rosapi_topic_type"), {"topic": name})
+        reply = await self.link.requests.call(ri.service("rosapi_topic_type"), {"topic": name})
         if not reply.get("ok"):
             raise TopicRefused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
         msg_type = str((reply.get("values") or {}).get("type") or "")
@@ -184,8 +184,8 @@ class Watches:
         for name, since in list(self.idle_since.items()):
             if now - since >= grace:
                 del self.idle_since[name]
-                self.link.unsubscribe(name, holder=HOLDER)
-                if name not in self.link.subscribed:
+                self.link.subscriptions.unsubscribe(name, holder=HOLDER)
+                if name not in self.link.subscriptions.subscribed:
                     self.last.pop(name, None)
                     self.latched.pop(name, None)
                 log.info("nobody watches %s any more: let go of its subscription", name)
@@ -237,7 +237,7 @@ class Watches:
         if self._listing is not None and time.monotonic() - self._listing[0] < LIST_CACHE_S:
             found = self._listing[1]
         else:
-            reply = await self.link.call(ri.service("rosapi_topics"))
+            reply = await self.link.requests.call(ri.service("rosapi_topics"))
             if not reply.get("ok"):
                 raise TopicRefused(reply.get("error_code", "failed"), reply.get("error", "rosapi did not answer"))
             values = reply.get("values") or {}
@@ -247,11 +247,11 @@ class Watches:
             found = [{"name": n, "type": self.types.get(n, ""), "publishers": p}
                      for n, p in zip(names, publishers, strict=True)]
             self._listing = (time.monotonic(), found)
-        subscribed = self.link.subscribed
+        subscribed = self.link.subscriptions.subscribed
         return [{**t, "subscribed": t["name"] in subscribed} for t in found]
 
     async def _publishers(self, name: str) -> list[str] | None:
-        reply = await self.link.call(ri.service("rosapi_publishers"), {"topic": name})
+        reply = await self.link.requests.call(ri.service("rosapi_publishers"), {"topic": name})
         if not reply.get("ok"):
             return None  # an older rosapi without the service: shown as unknown
         return [str(p) for p in (reply.get("values") or {}).get("publishers") or []]
@@ -264,12 +264,12 @@ class Watches:
         holder = f"rate:{rate_id}"
         times: list[float] = []
         self.counters[rate_id] = (name, times)
-        self.link.subscribe(name, msg_type, holder=holder)
+        self.link.subscriptions.subscribe(name, msg_type, holder=holder)
         try:
             await asyncio.sleep(window_s)
         finally:
             del self.counters[rate_id]
-            self.link.unsubscribe(name, holder=holder)
+            self.link.subscriptions.unsubscribe(name, holder=holder)
         hz = (len(times) - 1) / (times[-1] - times[0]) if len(times) >= 2 and times[-1] > times[0] else 0.0
         return {"topic": name, "type": msg_type, "hz": round(hz, 3), "messages": len(times), "window_s": window_s}
 

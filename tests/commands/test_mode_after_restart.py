@@ -52,20 +52,20 @@ def state_of(sim: SimThread) -> str:
 async def restart(link, sim: SimThread, revived: list[SimThread]) -> SimThread:
     """Stop the robot and start a new one on its port that stays in startup until told otherwise."""
     loop = asyncio.get_running_loop()
-    before = link.since
+    before = link.dial.since
     await loop.run_in_executor(None, sim.stop)
     await async_wait_until(lambda: not link.connected, timeout=10, what="the link to notice the robot left")
     again = SimThread(port=sim.port, video_port=0, startup_s=600, demo_s=600, commander_pause_s=PAUSE_S)
     await loop.run_in_executor(None, again.start)
     revived.append(again)
-    await async_wait_until(lambda: link.connected and link.since > before, timeout=15, what="the link reconnected")
+    await async_wait_until(lambda: link.connected and link.dial.since > before, timeout=15, what="the link reconnected")
     assert state_of(again) == "startup"
     return again
 
 
 async def heard_since_reconnect(link) -> None:
     """Wait for the robot's first report after the reconnect (its periodic SMACH status)."""
-    since = link.since
+    since = link.dial.since
     await async_wait_until(lambda: any(e["t"] >= since for e in get_store().get_recent("smach_status")),
                            timeout=10, what="a SMACH status from the restarted robot")
 

@@ -133,13 +133,13 @@ async def test_a_wedged_socket_is_noticed_and_the_link_dials_again(link_either, 
         server.send({"op": "advertise_service", "service": "/silent", "type": "std_srvs/srv/Trigger"})
         await async_wait_until(lambda: sim_either.call(lambda: "/silent" in sim_either.robot.broker.client_services),
                                timeout=10, what="the silent service")
-        since = link_either.since
-        reply = await link_either.call(ri.Service("silent", "/silent", "std_srvs/srv/Trigger"), timeout=1.0)
+        since = link_either.dial.since
+        reply = await link_either.requests.call(ri.Service("silent", "/silent", "std_srvs/srv/Trigger"), timeout=1.0)
         assert reply["error_code"] == "timeout"
         # rosbridge 2.x now holds every later frame of the link's socket; the link notices and dials again
-        await async_wait_until(lambda: link_either.connected and link_either.since > since, timeout=40,
+        await async_wait_until(lambda: link_either.connected and link_either.dial.since > since, timeout=40,
                                what="the link to reconnect")
-        answer = await link_either.call(ri.service("rosapi_topics"), timeout=5)
+        answer = await link_either.requests.call(ri.service("rosapi_topics"), timeout=5)
         assert answer["ok"], answer
     finally:
         server.close()

@@ -80,12 +80,12 @@ async def test_a_link_that_lost_its_lease_never_commands_the_robot(link, sim, le
     speech = ri.topic("text_to_speech")
     request = {"op": "publish", "topic": speech.name, "msg_type": speech.type}
 
-    reply = await link.execute({**request, "msg": {"data": "while holding"}})
+    reply = await link.requests.execute({**request, "msg": {"data": "while holding"}})
     assert reply["ok"], reply
     await async_wait_until(lambda: {"data": "while holding"} in sim.received(speech.name), what="the command")
 
     await _take_over(redis_server, b)
-    reply = await link.execute({**request, "msg": {"data": "after losing it"}})
+    reply = await link.requests.execute({**request, "msg": {"data": "after losing it"}})
     assert not reply["ok"] and "lost its lease" in reply["error"]
     await asyncio.sleep(0.5)
     assert {"data": "after losing it"} not in sim.received(speech.name)

@@ -103,7 +103,7 @@ async def test_it_relays_requests_over_the_channel_layer(link, sim):
 async def test_it_drops_requests_that_reach_the_link_after_their_deadline(link, sim):
     import time
 
-    reply = await link.execute({"op": "publish", "topic": "/x", "msg_type": "std_msgs/String", "msg": {}})
+    reply = await link.requests.execute({"op": "publish", "topic": "/x", "msg_type": "std_msgs/String", "msg": {}})
     assert reply["ok"] is True  # sanity: executes when on time
     await link.requests.handle({"op": "publish", "topic": ri.topic("register_event").name,
                                 "msg_type": "std_msgs/String", "msg": {"data": "late"}, "deadline": time.time() - 1})
@@ -124,12 +124,12 @@ async def test_it_lets_operators_but_not_viewers_reconnect_at_most_every_few_sec
     await as_operator.send_json_to({"action": "reconnect"})
     await receive_until(as_operator, lambda f: f["kind"] == "notice")
     await receive_until(as_operator, lambda f: f["kind"] == "status" and f["connected"], timeout=10)
-    since = link.since
+    since = link.dial.since
     await as_operator.send_json_to({"action": "reconnect"})  # a page's button pressed again at once
     again = await receive_until(as_operator, lambda f: f["kind"] == "error")
     assert again["message"].startswith("The robot link reconnected moments ago; try again in ")
     await asyncio.sleep(0.5)
-    assert link.connected and link.since == since  # the second press did not drop the connection
+    assert link.connected and link.dial.since == since  # the second press did not drop the connection
     rows = [(e.username, e.action, e.ok, e.error_code) async for e in AuditEntry.objects.order_by("id")]
     assert rows == [("vera", "link.reconnect", False, "forbidden"), ("otto", "link.reconnect", True, ""),
                     ("otto", "link.reconnect", False, "throttled")]
@@ -170,24 +170,24 @@ async def test_it_replays_recent_log_lines_to_a_page_opened_later(link, sim, vie
 async def test_it_turns_nagle_off_on_the_rosbridge_socket(link):
     import socket
 
-    handle = link.ros.factory._proto.transport.getHandle()
+    handle = link.dial.ros.factory._proto.transport.getHandle()
     # With Nagle on, small command frames wait ~30-40 ms for the robot's delayed ACK.
     assert handle.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
 
 
 async def test_a_subscription_the_robot_refuses_is_reported_and_tried_again_on_every_reconnect(link, sim):
-    link.subscribe("/lidar/points", "velodyne_msgs/VelodyneScan")  # a package the robot does not have
+    link.subscriptions.subscribe("/lidar/points", "velodyne_msgs/VelodyneScan")  # a package the robot does not have
 
     await async_wait_until(lambda: "/lidar/points" in link.subscriptions.failed, timeout=10, what="the refusal")
     assert "velodyne_msgs" in link.subscriptions.failed["/lidar/points"]
-    assert "/lidar/points" in link.status()["failed_subscriptions"]
+    assert "/lidar/points" in link.upkeep.status()["failed_subscriptions"]
     # What /healthz lists (dashboard.health reads the link's status from the store).
     await async_wait_until(lambda: "/lidar/points" in (link_status().get("failed_subscriptions") or {}),
                            timeout=5, what="the refusal in the stored link status")
 
-    before = link.since
-    link.reconnect()
-    await async_wait_until(lambda: link.since > before and "/lidar/points" in link.subscriptions.failed,
+    before = link.dial.since
+    link.dial.reconnect()
+    await async_wait_until(lambda: link.dial.since > before and "/lidar/points" in link.subscriptions.failed,
                            timeout=15, what="the subscription tried (and refused) again after the reconnect")
 
 
@@ -223,7 +223,7 @@ async def test_it_stops_cleanly_when_its_request_loop_was_cancelled(link, sim):
     with contextlib.suppress(asyncio.CancelledError):
         await link.requests.serving
     await asyncio.wait_for(link.stop(), 10)  # returns, and raises nothing
-    assert link.ros is None and not link.connected
+    assert link.dial.ros is None and not link.connected
 
 
 class _SlowThenFastLease:
@@ -247,8 +247,9 @@ async def test_publishes_reach_the_robot_in_the_order_they_came_whatever_the_fen
     link.requests.lease = _SlowThenFastLease()
     try:
         before = sim.robot.received_count(cmd_vel.name)
-        replies = await asyncio.gather(*(link.execute({"op": "publish", "topic": cmd_vel.name, "msg_type": cmd_vel.type,
-                                                       "msg": msg, "fresh_press": True}) for msg in (moving, zero)))
+        replies = await asyncio.gather(*(
+            link.requests.execute({"op": "publish", "topic": cmd_vel.name, "msg_type": cmd_vel.type,
+                                   "msg": msg, "fresh_press": True}) for msg in (moving, zero)))
         assert all(r["ok"] for r in replies), replies
         await async_wait_until(lambda: sim.robot.received_count(cmd_vel.name) == before + 2, timeout=5)
     finally:

@@ -56,7 +56,7 @@ async def test_a_topic_left_alone_is_unsubscribed_after_the_grace_period(link, s
 async def test_registry_and_recorded_topics_stay_subscribed_when_nobody_watches(link, sim, viewer, settings):
     settings.TOPICS_IDLE_GRACE_S = 0
     sonar = ri.topic("sonar")
-    link.subscribe(sonar.name, sonar.type, holder="recorder")  # as the recorder does for a recorded topic
+    link.subscriptions.subscribe(sonar.name, sonar.type, holder="recorder")  # as the recorder does for a recorded topic
     for name in (ROSOUT, sonar.name):
         page = await open_topic(viewer, name)
         await receive_until(page, is_echo(name), timeout=15)
@@ -65,14 +65,14 @@ async def test_registry_and_recorded_topics_stay_subscribed_when_nobody_watches(
                            what="the grace period over")
     assert sim.subscription_count(ROSOUT) == 1  # the registry's own
     assert sim.subscription_count(sonar.name) == 1  # the recorder's
-    link.unsubscribe(sonar.name, holder="recorder")
+    link.subscriptions.unsubscribe(sonar.name, holder="recorder")
     await async_wait_until(lambda: sim.subscription_count(sonar.name) == 0, timeout=10, what="recorder let go")
 
 
 async def test_a_dead_web_process_lease_runs_out(link, sim, settings, monkeypatch):
     settings.TOPICS_IDLE_GRACE_S = 0
     monkeypatch.setattr(holders, "LEASE_S", 0.5)
-    reply = await link.execute({"op": "topics_watch", "holder": "gone-process", "topics": [TF]})
+    reply = await link.requests.execute({"op": "topics_watch", "holder": "gone-process", "topics": [TF]})
     assert reply == {"ok": True, "refused": {}}
     await async_wait_until(lambda: sim.subscription_count(TF) == 1, timeout=10, what="subscribed")
     # Nobody renews: the lease expires, then the subscription goes.
@@ -144,7 +144,7 @@ async def test_large_messages_are_summarised(link, sim, viewer):
 
 
 async def test_it_lists_the_robots_topics_and_measures_a_rate(link, sim):
-    reply = await link.execute({"op": "topics_list"})
+    reply = await link.requests.execute({"op": "topics_list"})
     assert reply["ok"], reply
     topics = {t["name"]: t for t in reply["values"]}
     assert topics[ROSOUT]["type"] == "rosgraph_msgs/Log"
@@ -152,10 +152,10 @@ async def test_it_lists_the_robots_topics_and_measures_a_rate(link, sim):
     assert "/rosbridge_websocket" in topics[ROSOUT]["publishers"]
     assert topics[ri.topic("battery_soc").name]["publishers"] == ["/RosAria"]
     assert topics[TF]["subscribed"] is False
-    rate = await link.execute({"op": "topics_rate", "topic": ri.topic("robot_pose").name, "window_s": 2})
+    rate = await link.requests.execute({"op": "topics_rate", "topic": ri.topic("robot_pose").name, "window_s": 2})
     assert rate["ok"], rate
     assert 5 <= rate["values"]["hz"] <= 15  # the simulator publishes the pose at 10 Hz
-    missing = await link.execute({"op": "topics_rate", "topic": "/no/such_topic", "window_s": 1})
+    missing = await link.requests.execute({"op": "topics_rate", "topic": "/no/such_topic", "window_s": 1})
     assert missing["ok"] is False and missing["error_code"] == "not_found"
 
 

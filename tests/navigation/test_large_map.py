@@ -61,7 +61,7 @@ async def test_a_large_map_is_decoded_off_the_event_loop_and_rendered_exactly(li
 async def test_a_large_frame_the_link_cannot_decode_is_logged_and_the_link_carries_on(link, sim, caplog):
     await async_wait_until(map_meta, timeout=10, what="the simulator's own map")
     bad = b'{"op":"publish","topic":"/map","msg":{"data":[' + b"1," * LARGE_FRAME_BYTES + b',2]}}'
-    proto = link.ros.factory._proto
+    proto = link.dial.ros.factory._proto
     from twisted.internet import reactor
 
     reactor.callFromThread(proto.on_message, bad)

@@ -99,11 +99,11 @@ async def test_the_link_follows_a_latch_set_in_the_shared_store(link, sim):
     from robot.teleop.twist import Command, twist
 
     await aengage(by="someone")
-    await async_wait_until(lambda: link.guard.latched, timeout=5, what="the link to read the latch")
+    await async_wait_until(lambda: link.latch.guard.latched, timeout=5, what="the link to read the latch")
     with pytest.raises(EstopEngaged):
         await apublish("cmd_vel", twist(Command(0.3, 0.0)))
     await arelease(by="someone")
-    await async_wait_until(lambda: not link.guard.latched, timeout=5, what="the link to read the release")
+    await async_wait_until(lambda: not link.latch.guard.latched, timeout=5, what="the link to read the release")
 
 
 async def test_the_link_stops_the_robot_when_moving_twists_stop_arriving(link, sim, settings):

@@ -47,14 +47,14 @@ async def test_it_carries_the_link_to_the_robot(sim, endpoint, credential, agent
     link, tasks = await _link()
     try:
         await async_wait_until(lambda: link.connected, timeout=10, what="link connected through the uplink")
-        assert link.url == endpoint_url(endpoint)
+        assert link.dial.url == endpoint_url(endpoint)
         before = sim.received_count("/cyborg_audio/text_to_speech")
-        reply = await link.execute({"op": "publish", "topic": "/cyborg_audio/text_to_speech",
+        reply = await link.requests.execute({"op": "publish", "topic": "/cyborg_audio/text_to_speech",
                                     "msg_type": "std_msgs/String", "msg": {"data": "through the uplink"}})
         assert reply["ok"], reply
         await async_wait_until(lambda: sim.received_count("/cyborg_audio/text_to_speech") > before, timeout=5,
                                what="the robot got the publish")
-        status = link.status()
+        status = link.upkeep.status()
         assert status["connected"]
         assert endpoint.status()["connected"] and endpoint.status()["address"] == "127.0.0.1"
         connects = await _actions("uplink.connect")
@@ -156,7 +156,7 @@ async def _drive(link, x: float, seconds: float) -> None:
     end = time.monotonic() + seconds
     first = True
     while time.monotonic() < end:
-        reply = await link.execute({**_twist(x), "fresh_press": first})
+        reply = await link.requests.execute({**_twist(x), "fresh_press": first})
         first = False
         assert reply["ok"], reply
         await asyncio.sleep(0.05)
@@ -219,11 +219,11 @@ async def test_a_key_held_through_an_uplink_blip_moves_nothing_until_released(si
         refusals = []
         end = time.monotonic() + 1.0
         while time.monotonic() < end:  # the key is still held
-            reply = await link.execute(_twist(0.3))
+            reply = await link.requests.execute(_twist(0.3))
             refusals.append(reply.get("error_code"))
             await asyncio.sleep(0.05)
         assert set(refusals) == {"release_first"}, refusals
         assert not any(_speeds_since(sim, back_at)), "the held key moved the robot after the blip"
-        assert (await link.execute(_twist(0.0)))["ok"]  # let go …
+        assert (await link.requests.execute(_twist(0.0)))["ok"]  # let go …
         await _drive(link, 0.2, 0.3)  # … and press again
         await async_wait_until(lambda: 0.2 in _speeds_since(sim, back_at), timeout=5, what="driving again")

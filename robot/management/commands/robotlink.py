@@ -48,7 +48,7 @@ class Command(BaseCommand):
             loop.add_signal_handler(sig, self._stop_requested, stop)
         if settings.EMBEDDED:  # its own private Redis: no other link shares a lease with it
             link, tasks = await start_link(embedded=False)
-            self._say(f"Robot link running for {link.url}; Ctrl-C to stop.")
+            self._say(f"Robot link running for {link.dial.url}; Ctrl-C to stop.")
             await stop.wait()
             await stop_link(link, tasks)
         else:
@@ -77,7 +77,7 @@ class Command(BaseCommand):
     async def _hold(self, lease: Lease, stop: asyncio.Event, name: str) -> None:
         """Active until the lease is lost, a stop is asked for or something fails; then the link stops."""
         link, tasks = await start_link(embedded=False, lease=lease)
-        self._say(f"Robot link {name}: active for {link.url}; Ctrl-C to stop.")
+        self._say(f"Robot link {name}: active for {link.dial.url}; Ctrl-C to stop.")
         renewing: asyncio.Future | None = None
         try:
             await _first(lease.hold(), stop.wait())
