@@ -114,7 +114,7 @@ class AlertEngine:
             # Neither raised nor ended while starting: an outage handed over by the last raiser stays open.
             if not (starting and signal.key == "offline"):
                 self.apply(signal, now)
-        latch = link.latch_view(now)
+        latch = link.latch.view(now)
         self.apply(rules.estop(latched=latch.latched, by=latch.by, at=latch.at), now)
         # Offline or hung, every component would go stale: that is the link's alert, not theirs.
         if link.connected and link.dial.responding:

@@ -18,7 +18,7 @@ from robot.link.lease import Lease
 from robot.link.liveness import watch_liveness
 from robot.link.nav2 import Ros2Goals
 from robot.link.serving import Requests
-from robot.link.status import LatchView, LatchWatch, Upkeep
+from robot.link.status import LatchWatch, Upkeep
 from robot.link.subscriptions import Listener, Subscriptions, array_topics
 from robot.live import queues
 from robot.live.state import StateStore
@@ -66,14 +66,11 @@ class RobotLink:
         self._tasks: list[asyncio.Task] = []
         self._inflight = Tasks()
 
-    # --- what features use beside the parts ---------------------------------------------
+    # --- what every feature shares, beside the parts ------------------------------------
 
     @property
     def connected(self) -> bool:
         return self.dial.connected
-
-    def latch_view(self, now: float) -> LatchView:
-        return self.latch.view(now)
 
     def keep(self, task: asyncio.Task) -> asyncio.Task:
         """A feature's long-running task that ends with this link (cancelled at its stop)."""
