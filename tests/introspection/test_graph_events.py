@@ -19,7 +19,7 @@ from tests.introspection.test_tracking import leaves, stored
 @EITHER_ROS
 @pytest.mark.django_db(transaction=True)
 def test_an_event_offered_by_the_graph_goes_through_the_command_path(sim, link_thread, operator_api, viewer_api):
-    tracker = asyncio.run_coroutine_threadsafe(track_smach(link_thread), link_thread.loop)
+    tracker = asyncio.run_coroutine_threadsafe(track_smach(link_thread), link_thread.dial.loop)
     received = ri.topic("register_event").name
     try:
         wait_until(lambda: leaves() == ["/SM_ROOT/suspension"], timeout=20, what="suspension in the graph")

@@ -85,10 +85,10 @@ async def test_driving_a_frozen_robot_is_refused_with_the_reason(frozen_link, si
     await ws.send_json_to({"type": "release"})
     os.kill(sim_process.pid, signal.SIGSTOP)
     for _ in range(50):
-        if not frozen_link.responding:
+        if not frozen_link.dial.responding:
             break
         await asyncio.sleep(0.1)
-    assert not frozen_link.responding
+    assert not frozen_link.dial.responding
     await ws.send_json_to(key(0.5))
     error = await error_frame(ws)
     assert "not responding" in error["message"], error

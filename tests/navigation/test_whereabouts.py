@@ -47,7 +47,7 @@ def test_a_place_the_robot_names_is_seeded_only_where_it_stayed_while_naming_it(
 
 @pytest.mark.django_db(transaction=True)
 def test_it_says_where_the_robot_arrived_at_a_place_only_the_server_knows(sim, nav_link):
-    tracker = asyncio.run_coroutine_threadsafe(track_whereabouts(nav_link), nav_link.loop)
+    tracker = asyncio.run_coroutine_threadsafe(track_whereabouts(nav_link), nav_link.dial.loop)
     try:
         # Away from every place of the robot's own, at a spot only the server has a name for.
         sim.call(lambda: sim.robot.base.teleport(-3.0, 0.0, 0.0))
@@ -69,7 +69,7 @@ def test_a_place_the_robot_names_becomes_a_named_location_where_it_reported_bein
     Location.objects.filter(name="reception").delete()
     x, y, yaw = _robot_place(sim, "reception")
     sim.call(lambda: sim.robot.base.teleport(x, y, yaw))
-    tracker = asyncio.run_coroutine_threadsafe(track_whereabouts(nav_link), nav_link.loop)
+    tracker = asyncio.run_coroutine_threadsafe(track_whereabouts(nav_link), nav_link.dial.loop)
     try:
         wait_until(lambda: Location.objects.filter(name="reception").exists(), timeout=10,
                    what="the robot's reception to be seeded")

@@ -74,7 +74,7 @@ async def test_a_driver_is_told_who_took_over(link, sim, operator, admin_user):
 async def test_a_hung_robot_is_not_handed_the_drive_lock(frozen_link, sim_process, operator):  # noqa: F811
     ws = await drive_socket(operator)
     os.kill(sim_process.pid, signal.SIGSTOP)
-    await async_wait_until(lambda: not frozen_link.responding, timeout=10, what="the robot judged not responding")
+    await async_wait_until(lambda: not frozen_link.dial.responding, timeout=10, what="the robot judged not responding")
     await ws.send_json_to({"type": "acquire"})
     refused = await error_frame(ws)
     assert refused["code"] == "not_responding" and "not responding" in refused["message"], refused
@@ -82,7 +82,7 @@ async def test_a_hung_robot_is_not_handed_the_drive_lock(frozen_link, sim_proces
     assert (await error_frame(ws))["code"] == "not_responding"
     assert await get_lock().holder() is None
     os.kill(sim_process.pid, signal.SIGCONT)
-    await async_wait_until(lambda: frozen_link.responding, timeout=10, what="the robot answering again")
+    await async_wait_until(lambda: frozen_link.dial.responding, timeout=10, what="the robot answering again")
     await ws.send_json_to({"type": "acquire"})
     await lock_frame(ws, lambda f: f["you"])
     await ws.disconnect()
