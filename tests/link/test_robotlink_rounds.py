@@ -33,7 +33,7 @@ async def test_failed_rounds_are_logged_and_the_link_stands_by_again_its_link_st
     stop = asyncio.Event()
     held_at_start: list[bool] = []
     stopped: list[object] = []
-    links = [types.SimpleNamespace(url=f"ws://robot/{n}") for n in range(3)]
+    links = [types.SimpleNamespace(dial=types.SimpleNamespace(url=f"ws://robot/{n}")) for n in range(3)]
     real_hold = Lease.hold
 
     async def start_link(*, embedded: bool, lease: Lease) -> tuple[object, list]:
