@@ -25,7 +25,7 @@ def leaves() -> list[str]:
 
 @EITHER_ROS
 async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link, sim):
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     task = asyncio.ensure_future(track_smach(link))
     try:
         # Each container publishes its own structure: the graph grows as they arrive.
@@ -49,7 +49,7 @@ async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link
 
 @EITHER_ROS
 async def test_without_introspection_state_change_tells_the_active_state(link, sim):
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     # fresh_s < 0: no container status ever counts, as on a robot without introspection.
     task = asyncio.ensure_future(track_smach(link, fresh_s=-1))
     try:
@@ -71,7 +71,7 @@ def _diagnostic(name: str, level: int, message: str) -> dict:
 
 @EITHER_ROS
 async def test_diagnostics_are_kept_by_component_and_a_level_change_shows_at_once(link, sim):
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     task = asyncio.ensure_future(track_diagnostics(link, refresh_s=30))
     topic = ri.topic("diagnostics").name
 
