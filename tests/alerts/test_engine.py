@@ -49,7 +49,7 @@ async def alerts_frame(communicator, predicate, timeout=10.0) -> dict:
 @EITHER_ROS
 async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, viewer, operator):
     # The robot's log: rosgraph_msgs/Log on ROS 1, rcl_interfaces/msg/Log (levels 10-50, no header) on ROS 2.
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     communicator = ws_communicator(viewer)
     assert (await communicator.connect(timeout=10))[0]
     await communicator.send_json_to({"action": "watch", "keys": [ALERTS_KEY]})
