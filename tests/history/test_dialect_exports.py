@@ -31,7 +31,7 @@ def _mcap(topic: str, start: float) -> list:
 
 @EITHER_ROS
 async def test_the_robots_log_is_recorded_and_exported_as_the_robot_sent_it(recording, sim, link):
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     rosout = ri.topic("rosout")
     start = time.time()
     await sync_to_async(policy_upsert)(topic=rosout.name, msg_type=rosout.type, mode=Mode.EVERY)

@@ -31,7 +31,7 @@ pytestmark = pytest.mark.django_db(transaction=True)
 @pytest.fixture
 async def overlay_link(link, sim):
     assert overlays.listen in link.listeners  # from the link's start: the latched /tf_static comes once
-    await async_wait_until(lambda: link.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
+    await async_wait_until(lambda: link.dial.ros_version == sim.robot.ros, timeout=10, what="the link to find the ROS")
     yield link
 
 
