@@ -1,13 +1,13 @@
 """RosAria's diagnostic_updater on ``/diagnostics``, read from the simulated world: the
 battery's charge, the motors, the bumpers, the laser and the sonar.
 
-``statuses`` turns one ``Reading`` of the robot into ``DiagnosticStatus`` entries; the node
-publishes them once a second, and at once when a level changes (a motor switched off, a bump).
+``statuses`` turns one ``Reading`` of the robot into ``DiagnosticStatus`` entries; the node polls
+a few times a second and publishes them once a second, and at once when a level changes (a motor
+switched off, a bump).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -84,36 +84,32 @@ def statuses(r: Reading) -> list[dict[str, Any]]:
     ]
 
 
-class DiagnosticsPublisher:
-    """Call ``poll`` often (a few times a second): it publishes when a second has passed or a level moved."""
-
-    def __init__(self, read: Callable[[], Reading], publish: Callable[[dict[str, Any]], None]) -> None:
-        self.read = read
-        self.publish = publish
-        self._levels: list[tuple[str, int, str]] = []
-        self._sent_at = float("-inf")
-
-    def poll(self, now: float) -> bool:
-        current = statuses(self.read())
-        levels = [(s["name"], s["level"], s["message"]) for s in current]
-        if levels == self._levels and now - self._sent_at < PERIOD_S:
-            return False
-        self._levels, self._sent_at = levels, now
-        self.publish({"header": messages.header(), "status": current})
-        return True
-
-
 class DiagnosticsNode(SimNode):
     names: tuple[str, ...] = ()  # RosAria publishes them (the base node names /RosAria)
     publishes = ("diagnostics",)
 
     def __init__(self, base: BaseNode) -> None:
         self.base = base
-        self.publisher = DiagnosticsPublisher(self.read, lambda msg: self.bus.publish("diagnostics", msg))
+        self._levels: list[tuple[str, int, str]] = []
+        self._sent_at = float("-inf")
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        bus.every(POLL_S, lambda: self.publisher.poll(self.bus.clock.now()))
+        bus.every(POLL_S, self._poll)
+
+    def _poll(self) -> None:
+        msg = self.poll(self.read(), self.bus.clock.now())
+        if msg is not None:
+            self.bus.publish("diagnostics", msg)
+
+    def poll(self, reading: Reading, now: float) -> dict[str, Any] | None:
+        """The message to publish when a second has passed or a level moved, else None."""
+        current = statuses(reading)
+        levels = [(s["name"], s["level"], s["message"]) for s in current]
+        if levels == self._levels and now - self._sent_at < PERIOD_S:
+            return None
+        self._levels, self._sent_at = levels, now
+        return {"header": messages.header(), "status": current}
 
     def read(self) -> Reading:
         base, b = self.base, self.base.body

@@ -32,13 +32,12 @@ def test_parts_warn_and_fail_as_the_world_says():
 
 
 def test_the_node_publishes_each_second_and_at_once_when_a_level_moves():
-    sent = []
-    reading = [CALM]
-    node = simdiag.DiagnosticsPublisher(lambda: reading[0], sent.append)
-    assert node.poll(0.0) and len(sent) == 1
-    assert not node.poll(0.5)
-    reading[0] = replace(CALM, motors=False)
-    assert node.poll(0.6)
-    assert not node.poll(1.0)
-    assert node.poll(1.7)
-    assert [s["level"] for s in sent[-1]["status"] if s["name"] == "RosAria: Motors"] == [1]
+    node = simdiag.DiagnosticsNode(None)
+    assert node.poll(CALM, 0.0) is not None
+    assert node.poll(CALM, 0.5) is None
+    off = replace(CALM, motors=False)
+    assert node.poll(off, 0.6) is not None
+    assert node.poll(off, 1.0) is None
+    sent = node.poll(off, 1.7)
+    assert sent is not None
+    assert [s["level"] for s in sent["status"] if s["name"] == "RosAria: Motors"] == [1]
