@@ -67,7 +67,7 @@ async def talk(stack: Stack, sim: SimThread, cookie: str) -> tuple[list[float], 
     ws = await audio_socket(stack, cookie)
     await ws.send(json.dumps(TALK))
     await until(ws, "talking")
-    sim.call(sim.robot.speaker.reset)
+    sim.call(sim.robot.av_node.speaker.reset)
     sent: list[float] = []
     loop = asyncio.get_running_loop()
     due = loop.time()
@@ -78,13 +78,13 @@ async def talk(stack: Stack, sim: SimThread, cookie: str) -> tuple[list[float], 
         due += 0.02
         await asyncio.sleep(max(0.0, due - loop.time()))
     deadline = time.monotonic() + 5
-    while len(sim.robot.speaker.chunks) < len(sent) and time.monotonic() < deadline:
+    while len(sim.robot.av_node.speaker.chunks) < len(sent) and time.monotonic() < deadline:
         await asyncio.sleep(0.05)
     await ws.send(json.dumps({"type": "talk", "on": False}))
     await ws.close()
-    heard = list(sim.robot.speaker.chunks)
+    heard = list(sim.robot.av_node.speaker.chunks)
     latencies = [(h.t - s) * 1000 for s, h in zip(sent, heard, strict=False)]
-    missing_s = (len(sent) - len(heard)) * 0.02 + sim.robot.speaker.gap_s(buffer_s=0.06)
+    missing_s = (len(sent) - len(heard)) * 0.02 + sim.robot.av_node.speaker.gap_s(buffer_s=0.06)
     return latencies, 100.0 * missing_s / TALK_S
 
 

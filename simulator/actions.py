@@ -1,7 +1,7 @@
 """actionlib servers over topics (``<ns>/goal``, ``/cancel`` in; ``/status``, ``/feedback``,
 ``/result`` out), as a ROS 1 SimpleActionServer behaves: a new goal preempts the current one.
 
-``Ros2Action`` puts the same server behind ROS 2's rosbridge action ops (``send_action_goal``,
+``Ros2Action`` is the same server behind ROS 2's rosbridge action ops (``send_action_goal``,
 ``cancel_action_goal`` in; ``action_feedback``, ``action_result`` out), its goal status on
 ``<ns>/_action/status`` and its cancel service on ``<ns>/_action/cancel_goal``."""
 
@@ -16,7 +16,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from robot import interface as ri
+
 from . import messages
+from .bus import Bus
 from .protocol import ActionEndpoint, Client
 
 PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
@@ -42,11 +45,12 @@ class ActionServer:
     """Callbacks: ``on_goal(goal)`` when a goal becomes active, ``on_cancel(goal)`` when the
     active goal is preempted (by a cancel or a newer goal)."""
 
-    def __init__(self, name: str, action_type: str, publish: Callable[[str, dict[str, Any]], None],
-                 on_goal: Callable[[Goal], None], on_cancel: Callable[[Goal], None]) -> None:
+    bus: Bus
+
+    def __init__(self, name: str, action_type: str, on_goal: Callable[[Goal], None],
+                 on_cancel: Callable[[Goal], None]) -> None:
         self.name = name
         self.type = action_type
-        self.publish = publish
         self.on_goal = on_goal
         self.on_cancel = on_cancel
         self.status_topic = f"{name}/status"
@@ -54,12 +58,15 @@ class ActionServer:
         self.current: Goal | None = None
         self._ids = itertools.count(1)
 
-    @property
-    def topics(self) -> dict[str, str]:
-        t = self.type
-        return {f"{self.name}/goal": f"{t}ActionGoal", f"{self.name}/cancel": "actionlib_msgs/GoalID",
-                f"{self.name}/status": "actionlib_msgs/GoalStatusArray",
-                f"{self.name}/feedback": f"{t}ActionFeedback", f"{self.name}/result": f"{t}ActionResult"}
+    def install(self, bus: Bus) -> None:
+        """Declare the action's topics and take goals and cancels from them."""
+        self.bus, n, t = bus, self.name, self.type
+        for name, msg_type in {f"{n}/goal": f"{t}ActionGoal", f"{n}/cancel": "actionlib_msgs/GoalID",
+                               self.status_topic: "actionlib_msgs/GoalStatusArray",
+                               f"{n}/feedback": f"{t}ActionFeedback", f"{n}/result": f"{t}ActionResult"}.items():
+            bus.declare(name, msg_type)
+        bus.on_name(f"{n}/goal", self.receive_goal)
+        bus.on_name(f"{n}/cancel", self.receive_cancel)
 
     def new_goal_id(self) -> str:
         return f"{self.name.strip('/').replace('/', '_')}-{next(self._ids)}-{time.time():.3f}"
@@ -95,8 +102,12 @@ class ActionServer:
                     self.on_cancel(goal)
 
     def feedback(self, goal: Goal, feedback: dict[str, Any]) -> None:
-        self.publish(f"{self.name}/feedback", {"header": messages.header(), "status": goal.goal_status(),
-                                               "feedback": feedback})
+        self.bus.publish_name(f"{self.name}/feedback", {"header": messages.header(), "status": goal.goal_status(),
+                                                        "feedback": feedback})
+
+    def send_result(self, goal: Goal, result: dict[str, Any]) -> None:
+        self.bus.publish_name(f"{self.name}/result", {"header": messages.header(), "status": goal.goal_status(),
+                                                      "result": result})
 
     def finish(self, goal: Goal, status: int, text: str = "", result: dict[str, Any] | None = None) -> None:
         if goal.status in TERMINAL:
@@ -106,8 +117,7 @@ class ActionServer:
             self.current = None
         if result is None:
             result = messages.default(f"{self.type}Result")
-        self.publish(f"{self.name}/result", {"header": messages.header(), "status": goal.goal_status(),
-                                             "result": result})
+        self.send_result(goal, result)
         self.publish_status()
 
     def status_message(self) -> dict[str, Any]:
@@ -118,7 +128,7 @@ class ActionServer:
         return {"header": messages.header(), "status_list": [g.goal_status() for g in self.goals.values()]}
 
     def publish_status(self) -> None:
-        self.publish(self.status_topic, self.status_message())
+        self.bus.publish_name(self.status_topic, self.status_message())
 
 
 # actionlib's status -> action_msgs/GoalStatus (1 ACCEPTED, 2 EXECUTING, 3 CANCELING, 4 SUCCEEDED,
@@ -137,66 +147,67 @@ def goal_uuid(goal_id: str) -> str:
     return base64.b64encode(raw if len(raw) == 16 else hashlib.md5(goal_id.encode()).digest()).decode()
 
 
-class Ros2Action(ActionEndpoint):
-    """``server`` as a ROS 2 action: ``goal_in`` turns a goal into the server's, ``feedback_out`` the
+class Ros2Action(ActionServer, ActionEndpoint):
+    """The server as a ROS 2 action: ``goal_in`` turns a goal into the server's, ``feedback_out`` the
     server's feedback into the action's."""
 
-    def __init__(self, server: ActionServer, wire_type: str, publish: Callable[[str, dict[str, Any], bool], None],
-                 goal_in: Callable[[dict[str, Any]], dict[str, Any]] = lambda g: g,
+    def __init__(self, name: str, action_type: str, on_goal: Callable[[Goal], None],
+                 on_cancel: Callable[[Goal], None], goal_in: Callable[[dict[str, Any]], dict[str, Any]] = lambda g: g,
                  feedback_out: Callable[[Goal, dict[str, Any]], dict[str, Any]] = lambda goal, f: f) -> None:
-        self.server, self.type, self._publish_topic = server, wire_type, publish
+        super().__init__(name, action_type, on_goal, on_cancel)
         self.goal_in, self.feedback_out = goal_in, feedback_out
         self.owners: dict[str, tuple[Client, Any]] = {}  # goal id -> the client and op id that sent it
-        server.publish = self._publish
-        server.status_topic = f"{server.name}/_action/status"
-        self.cancel_service = f"{server.name}/_action/cancel_goal"
+        self.status_topic = f"{name}/_action/status"
+
+    def install(self, bus: Bus) -> None:
+        """Take goals from rosbridge's action ops; declare the status topic and answer the cancel service."""
+        self.bus = bus
+        bus.actions[self.name] = self
+        bus.declare(self.status_topic, ri.ACTION_STATUS_TYPE)
+        bus.answer_name(f"{self.name}/_action/cancel_goal", ri.ACTION_CANCEL_TYPE, self.cancel_service_call)
 
     def send_goal(self, client: Client, op_id: Any, args: dict[str, Any]) -> None:
-        goal = messages.normalize(f"{self.server.type}Goal", args)
+        goal = messages.normalize(f"{self.type}Goal", args)
         gid = uuid.uuid4().hex
         self.owners[gid] = (client, op_id)
-        self.server.receive_goal({"goal_id": {"stamp": messages.stamp(), "id": gid}, "goal": self.goal_in(goal)})
+        self.receive_goal({"goal_id": {"stamp": messages.stamp(), "id": gid}, "goal": self.goal_in(goal)})
 
     def cancel_goal(self, client: Client, op_id: Any) -> None:
         for gid, owner in list(self.owners.items()):
             if owner == (client, op_id):
-                self.server.receive_cancel({"id": gid, "stamp": {"secs": 0, "nsecs": 0}})
+                self.receive_cancel({"id": gid, "stamp": {"secs": 0, "nsecs": 0}})
 
     def cancel_service_call(self, request: dict[str, Any]) -> dict[str, Any]:
         """action_msgs/CancelGoal: a zero UUID and stamp cancel every goal, a stamp those up to it."""
         info = request["goal_info"]
         wanted, stamp = info["goal_id"]["uuid"], info["stamp"]
-        live = [g for g in self.server.goals.values() if g.status not in TERMINAL]
+        live = [g for g in self.goals.values() if g.status not in TERMINAL]
         if wanted == ZERO_UUID:
             gid = ""
         else:
             gid = next((g.id for g in live if goal_uuid(g.id) == wanted), "")
             if not gid and not (stamp["secs"] or stamp["nsecs"]):
                 return {"return_code": CANCEL_UNKNOWN_GOAL, "goals_canceling": []}
-        self.server.receive_cancel({"id": gid, "stamp": stamp})
+        self.receive_cancel({"id": gid, "stamp": stamp})
         canceled = [g for g in live if g.status in TERMINAL]
         return {"return_code": CANCEL_OK if canceled else CANCEL_REJECTED,
                 "goals_canceling": [{"goal_id": {"uuid": goal_uuid(g.id)}, "stamp": g.stamp} for g in canceled]}
 
-    def _publish(self, name: str, msg: dict[str, Any]) -> None:
-        if name == self.server.status_topic:
-            self._publish_topic(name, {"status_list": [
-                {"goal_info": {"goal_id": {"uuid": goal_uuid(s["goal_id"]["id"])}, "stamp": s["goal_id"]["stamp"]},
-                 "status": ROS2_STATUS[s["status"]]} for s in msg["status_list"]]}, True)
-            return
-        gid = msg["status"]["goal_id"]["id"]
-        kind = name.rsplit("/", 1)[-1]
-        if kind == "feedback":
-            owner = self.owners.get(gid)
-            if owner is not None:
-                values = self.feedback_out(self.server.goals[gid], msg["feedback"])
-                owner[0].reply({"op": "action_feedback", "id": owner[1], "action": self.server.name,
-                                "values": values})
-        elif kind == "result":
-            owner = self.owners.pop(gid, None)
-            if owner is not None:
-                client, op_id = owner
-                client.reply({"op": "action_result", "id": op_id, "action": self.server.name,
-                              "values": msg["result"], "status": ROS2_STATUS[msg["status"]["status"]],
-                              "result": True})
-                client.release(("goal", op_id))
+    def publish_status(self) -> None:
+        self.bus.publish_name(self.status_topic, {"status_list": [
+            {"goal_info": {"goal_id": {"uuid": goal_uuid(s["goal_id"]["id"])}, "stamp": s["goal_id"]["stamp"]},
+             "status": ROS2_STATUS[s["status"]]} for s in self.status_message()["status_list"]]}, latch=True)
+
+    def feedback(self, goal: Goal, feedback: dict[str, Any]) -> None:
+        owner = self.owners.get(goal.id)
+        if owner is not None:
+            owner[0].reply({"op": "action_feedback", "id": owner[1], "action": self.name,
+                            "values": self.feedback_out(goal, feedback)})
+
+    def send_result(self, goal: Goal, result: dict[str, Any]) -> None:
+        owner = self.owners.pop(goal.id, None)
+        if owner is not None:
+            client, op_id = owner
+            client.reply({"op": "action_result", "id": op_id, "action": self.name, "values": result,
+                          "status": ROS2_STATUS[goal.status], "result": True})
+            client.release(("goal", op_id))

@@ -1,7 +1,7 @@
 """What a simulated ROS node sees of the simulator: the ROS graph, the clock and /rosout.
 
 ``SimRobot`` owns one ``Bus`` and hands it to every node's ``start``. A node never
-touches the broker, the websocket or another node's topics directly: it publishes and
+touches the websocket or another node's topics directly: it publishes and
 handles topics by their key in ``robot/interface.py``, answers services, asks the clock
 to call it back, and logs to /rosout. That is all a new node needs (see README.md).
 """
@@ -10,20 +10,26 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import itertools
 import logging
 import math
 import time
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from robot import interface as ri
 
-from .protocol import Broker, ServiceHandler
+from .messages import ROS1, Dialect
+
+if TYPE_CHECKING:
+    from .protocol import ActionEndpoint, Client, Subscription
 
 log = logging.getLogger("simulator")
 
 Handler = Callable[[dict[str, Any]], object]
+ServiceHandler = Callable[[dict[str, Any]], dict[str, Any]]
+RECEIVED_KEEP = 10_000
 TickFn = Callable[[float, float], None]  # (monotonic now, dt seconds)
 _LOG_LEVELS = {1: logging.DEBUG, 2: logging.INFO, 4: logging.WARNING, 8: logging.ERROR, 16: logging.CRITICAL}
 
@@ -51,6 +57,20 @@ class SimNode:
 
     def stop(self) -> None:
         """Nothing runs outside the bus: the simulator cancels what ``bus.spawn`` started."""
+
+
+class NoAnswer(Exception):
+    """A service handler that never answers (its node died mid-call)."""
+
+
+class ServiceError(Exception):
+    """A service handler failed; the caller gets ``result: false`` with this text."""
+
+
+@dataclass
+class Received:
+    t: float
+    msg: dict[str, Any]
 
 
 @dataclass
@@ -95,13 +115,35 @@ class Clock:
 
 
 class Bus:
-    def __init__(self, broker: Broker, clock: Clock) -> None:
-        self.broker = broker
+    """The ROS graph — topics, types, latched messages, services, ROS 2 action servers — as the
+    nodes (by interface key) and the rosbridge clients (``protocol.Client``, by name) reach it."""
+
+    def __init__(self, clock: Clock, dialect: Dialect = ROS1, goals_in_new_thread: bool = False,
+                 services_in_new_thread: bool = False) -> None:
         self.clock = clock
-        self.dialect = broker.dialect
+        self.dialect = dialect
+        self.encode = dialect.encode
+        self.goals_in_new_thread = goals_in_new_thread
+        self.services_in_new_thread = services_in_new_thread
         self.rosout_log: collections.deque[dict[str, Any]] = collections.deque(maxlen=200)
         self.tasks: list[asyncio.Task[Any]] = []
         self._warned: dict[str, float] = {}
+        self.actions: dict[str, ActionEndpoint] = {}
+        self.types: dict[str, str] = {}
+        self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
+        self.latched: dict[str, str] = {}
+        self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}  # built for the first subscriber
+        self.handlers: dict[str, list[Handler]] = collections.defaultdict(list)
+        self.received_msgs: dict[str, collections.deque[Received]] = collections.defaultdict(
+            lambda: collections.deque(maxlen=RECEIVED_KEEP))
+        self.received_counts: collections.Counter[str] = collections.Counter()
+        self.services: dict[str, tuple[str, ServiceHandler]] = {}
+        self.client_services: dict[str, Client] = {}  # service -> the client that advertised it
+        self.clients: dict[int, Client] = {}
+        self.publishers: dict[str, set[int]] = collections.defaultdict(set)
+        self.client_ids = itertools.count()
+        self.call_ids = (f"service_request:{n}" for n in itertools.count())  # calls relayed to a client
+        self.pending_calls: dict[str, tuple[Client, Any, str]] = {}
 
     # --- topics ------------------------------------------------------------------------
 
@@ -118,47 +160,97 @@ class Bus:
     def publish(self, key: str, msg: dict[str, Any]) -> None:
         """Publish on the interface topic ``key`` (latched if the interface says so)."""
         t = self.topic(key)
-        self.broker.publish(t.name, msg, latch=t.latched)
+        self.publish_name(t.name, msg, latch=t.latched)
 
     def publish_name(self, name: str, msg: dict[str, Any], latch: bool = False) -> None:
-        """Publish on a topic the interface does not name (action servers, rosbridge's own)."""
-        self.broker.publish(name, msg, latch=latch)
+        """Publish on a topic by its name (action servers, rosbridge's own, a client's publish)."""
+        subs = self.subs.get(name)
+        if not subs and not latch:
+            return
+        frame = self.encode({"op": "publish", "topic": name, "msg": msg})
+        if latch:
+            self.latched[name] = frame
+        raw: bytes | None = None
+        for sub in list(subs.values()) if subs else ():
+            if sub.raw:
+                raw = raw or self.dialect.raw_frame(name, self.types.get(name, ""), msg)
+                sub.offer(raw)
+            else:
+                sub.offer(frame)
+
+    def latched_frame(self, name: str) -> str | None:
+        if name not in self.latched and name in self.lazy_latched:
+            msg = self.lazy_latched.pop(name)()
+            self.latched[name] = self.encode({"op": "publish", "topic": name, "msg": msg})
+        return self.latched.get(name)
 
     def wants(self, key: str) -> bool:
         """Whether anyone subscribes to ``key``: costly messages are only built for a listener."""
-        return self.broker.wants(self.topic(key).name)
+        return bool(self.subs.get(self.topic(key).name))
+
+    def subscription_count(self, name: str) -> int:
+        return sum(len(s.params) for s in self.subs.get(name, {}).values())
 
     def announce(self, key: str, msg: dict[str, Any]) -> None:
         """A node publishing on a topic other nodes listen to: subscribers and in-process handlers get it."""
         name = self.topic(key).name
-        self.broker.publish(name, msg)
-        for handler in self.broker.handlers.get(name, ()):
+        self.publish_name(name, msg)
+        for handler in self.handlers.get(name, ()):
             handler(msg)
+
+    def deliver(self, name: str, msg: dict[str, Any], latch: bool) -> None:
+        """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
+        self.received_msgs[name].append(Received(time.time(), msg))
+        self.received_counts[name] += 1
+        self.publish_name(name, msg, latch=latch)
+        for handler in self.handlers.get(name, ()):
+            try:
+                handler(msg)
+            except Exception:  # a robot node's bug must not kill the client's session
+                log.exception("handler for %s failed", name)
 
     def on(self, key: str, handler: Handler) -> None:
         """Call ``handler(msg)`` for every message a client (or ``announce``) publishes on ``key``."""
         self.on_name(self.topic(key).name, handler)
 
     def on_name(self, name: str, handler: Handler) -> None:
-        self.broker.handlers[name].append(handler)
+        self.handlers[name].append(handler)
 
     def declare(self, name: str, msg_type: str) -> None:
         """Make a topic the interface does not list known to rosapi and to clients."""
-        self.broker.types[name] = self.dialect.spell(msg_type)
+        self.types[name] = self.dialect.spell(msg_type)
 
     def latch_lazily(self, key: str, build: Callable[[], dict[str, Any]]) -> None:
         """A latched topic whose (large) message is only built when first needed."""
-        self.broker.lazy_latched[self.topic(key).name] = build
+        self.lazy_latched[self.topic(key).name] = build
+
+    # --- clients -------------------------------------------------------------------------
+
+    def unsubscribe(self, client_id: int, name: str) -> None:
+        """End a client's subscription to ``name`` (every id it subscribed with)."""
+        sub = self.subs[name].pop(client_id, None)
+        if sub:
+            sub.stop()
+        if not self.subs[name]:
+            del self.subs[name]
+
+    def disconnect(self, client: Client) -> None:
+        self.clients.pop(client.id, None)
+        for name in list(self.subs):
+            self.unsubscribe(client.id, name)
+        for pubs in self.publishers.values():
+            pubs.discard(client.id)
+        self.client_services = {n: c for n, c in self.client_services.items() if c is not client}
 
     # --- services ------------------------------------------------------------------------
 
     def answer(self, key: str, handler: ServiceHandler) -> None:
-        """Answer the interface service ``key``; raise ``protocol.ServiceError`` to fail a call."""
+        """Answer the interface service ``key``; raise ``ServiceError`` to fail a call."""
         s = self.service(key)
         self.answer_name(s.name, s.type, handler)
 
     def answer_name(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
-        self.broker.services[name] = (self.dialect.spell(srv_type, "srv"), handler)
+        self.services[name] = (self.dialect.spell(srv_type, "srv"), handler)
 
     # --- clock -----------------------------------------------------------------------------
 

@@ -2,7 +2,7 @@
 
     with SimThread(port=0, startup_s=0.5) as sim:
         ros = roslibpy.Ros(sim.host, sim.port) ...
-        sim.subscription_count("/cmd_vel"); sim.call(lambda: sim.robot.fire("restart"))
+        sim.subscription_count("/cmd_vel"); sim.call(lambda: sim.robot.controller.fire("restart"))
 """
 
 from __future__ import annotations

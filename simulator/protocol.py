@@ -1,9 +1,8 @@
 """The rosbridge v2 protocol as the ROS 1 rosbridge_server (and, with the ROS 2 dialect, the ROS 2 one) speaks it.
 
-``Broker`` is the simulator's stand-in for the ROS graph (topics, latched messages,
-services, ROS 2 action servers); ``Client`` is one websocket connection and its rosbridge
-session. Frames a client gets wrong are logged (ERROR on /rosout from /rosbridge_websocket)
-and dropped: neither server answers with ``status`` frames.
+``RosbridgeServer`` accepts websocket clients; ``Client`` is one connection and its rosbridge
+session on the ROS graph (``bus.Bus``). Frames a client gets wrong are logged (ERROR on
+/rosout from /rosbridge_websocket) and dropped: neither server answers with ``status`` frames.
 
 The ROS 2 server's launch defaults handle one op of a client at a time: a goal it sent, or a
 call of a service another client serves, holds that client's later frames until it ends
@@ -14,7 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
-import itertools
+import contextlib
 import json
 import logging
 import time
@@ -22,34 +21,18 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from websockets.asyncio.server import Server, ServerConnection, serve
+from websockets.exceptions import ConnectionClosed
+
 from . import messages
-from .messages import ROS1, Dialect
+from .bus import Bus, NoAnswer, ServiceError
 
 log = logging.getLogger("simulator.rosbridge")
 
-RECEIVED_KEEP = 10_000
-
-# level, text -> /rosout from /rosbridge_websocket
-LogFn = Callable[[int, str], None]
-ServiceHandler = Callable[[dict[str, Any]], dict[str, Any]]
 
 
 class ProtocolError(Exception):
     """A frame rosbridge would refuse; logged and dropped."""
-
-
-class NoAnswer(Exception):
-    """A service handler that never answers (its node died mid-call)."""
-
-
-class ServiceError(Exception):
-    """A service handler failed; the caller gets ``result: false`` with this text."""
-
-
-@dataclass
-class Received:
-    t: float
-    msg: dict[str, Any]
 
 
 @dataclass
@@ -119,94 +102,6 @@ class ActionEndpoint:
         raise NotImplementedError
 
 
-class Broker:
-    """Topics, types, latched messages and services: the part of ROS the clients see."""
-
-    def __init__(self, log_fn: LogFn, dialect: Dialect = ROS1, goals_in_new_thread: bool = False,
-                 services_in_new_thread: bool = False) -> None:
-        self.log = log_fn
-        self.dialect = dialect
-        self.encode = dialect.encode
-        self.goals_in_new_thread = goals_in_new_thread
-        self.services_in_new_thread = services_in_new_thread
-        self.actions: dict[str, ActionEndpoint] = {}
-        self.types: dict[str, str] = {}
-        self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
-        self.latched: dict[str, str] = {}
-        self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}  # built for the first subscriber
-        self.handlers: dict[str, list[Callable[[dict[str, Any]], object]]] = collections.defaultdict(list)
-        self.received_msgs: dict[str, collections.deque[Received]] = collections.defaultdict(
-            lambda: collections.deque(maxlen=RECEIVED_KEEP))
-        self.received_counts: collections.Counter[str] = collections.Counter()
-        self.services: dict[str, tuple[str, ServiceHandler]] = {}
-        self.client_services: dict[str, Client] = {}  # service -> the client that advertised it
-        self.clients: dict[int, Client] = {}
-        self.publishers: dict[str, set[int]] = collections.defaultdict(set)
-        self.client_ids = itertools.count()
-        self.call_ids = (f"service_request:{n}" for n in itertools.count())  # calls relayed to a client
-        self.pending_calls: dict[str, tuple[Client, Any, str]] = {}
-
-    # --- robot side ------------------------------------------------------------------
-
-    def wants(self, topic: str) -> bool:
-        return bool(self.subs.get(topic))
-
-    def publish(self, topic: str, msg: dict[str, Any], latch: bool = False) -> None:
-        subs = self.subs.get(topic)
-        if not subs and not latch:
-            return
-        frame = self.encode({"op": "publish", "topic": topic, "msg": msg})
-        if latch:
-            self.latched[topic] = frame
-        raw: bytes | None = None
-        for sub in list(subs.values()) if subs else ():
-            if sub.raw:
-                raw = raw or self.dialect.raw_frame(topic, self.types.get(topic, ""), msg)
-                sub.offer(raw)
-            else:
-                sub.offer(frame)
-
-    def latched_frame(self, topic: str) -> str | None:
-        if topic not in self.latched and topic in self.lazy_latched:
-            msg = self.lazy_latched.pop(topic)()
-            self.latched[topic] = self.encode({"op": "publish", "topic": topic, "msg": msg})
-        return self.latched.get(topic)
-
-    # --- introspection ---------------------------------------------------------------
-
-    def subscription_count(self, topic: str) -> int:
-        return sum(len(s.params) for s in self.subs.get(topic, {}).values())
-
-    # --- client side -----------------------------------------------------------------
-
-    def unsubscribe(self, client_id: int, topic: str) -> None:
-        """End a client's subscription to ``topic`` (every id it subscribed with)."""
-        sub = self.subs[topic].pop(client_id, None)
-        if sub:
-            sub.stop()
-        if not self.subs[topic]:
-            del self.subs[topic]
-
-    def disconnect(self, client: Client) -> None:
-        self.clients.pop(client.id, None)
-        for topic in list(self.subs):
-            self.unsubscribe(client.id, topic)
-        for pubs in self.publishers.values():
-            pubs.discard(client.id)
-        self.client_services = {n: c for n, c in self.client_services.items() if c is not client}
-
-    def deliver(self, topic: str, msg: dict[str, Any], latch: bool) -> None:
-        """A client's publish: record it, hand it to the robot's nodes and to every subscriber."""
-        self.received_msgs[topic].append(Received(time.time(), msg))
-        self.received_counts[topic] += 1
-        self.publish(topic, msg, latch=latch)
-        for handler in self.handlers.get(topic, ()):
-            try:
-                handler(msg)
-            except Exception:  # a robot node's bug must not kill the client's session
-                log.exception("handler for %s failed", topic)
-
-
 def _check(frame: dict[str, Any], spec: list[tuple[bool, str, type]]) -> None:
     # rosbridge_library's Capability.basic_type_check (isinstance, so bool passes for int).
     for mandatory, name, expected in spec:
@@ -230,16 +125,16 @@ class Client:
     )
     ACTION_OPS = ("send_action_goal", "cancel_action_goal")
 
-    def __init__(self, broker: Broker, send: Callable[[str | bytes], Any], address: str = "") -> None:
-        self.broker = broker
-        self.id = next(broker.client_ids)
+    def __init__(self, bus: Bus, send: Callable[[str | bytes], Any], address: str = "") -> None:
+        self.bus = bus
+        self.id = next(bus.client_ids)
         self.address = address
         self.connected_at = time.time()
         self._send = send  # coroutine function: await send(text)
         self.outbox: asyncio.Queue[str | bytes] = asyncio.Queue()
         self.closed = False
         self.fragments: dict[Any, dict[int, str]] = {}
-        self.ops = self.OPS + (self.ACTION_OPS if broker.dialect.ros2 else ())
+        self.ops = self.OPS + (self.ACTION_OPS if bus.dialect.ros2 else ())
         self.busy: set[Any] = set()  # what holds this client's frames (ROS 2 server, one op at a time)
         self.held: collections.deque[str | bytes] = collections.deque()
 
@@ -258,7 +153,7 @@ class Client:
             await self._send(await self.outbox.get())
 
     def reply(self, frame: dict[str, Any]) -> None:
-        self.send(self.broker.encode(frame))
+        self.send(self.bus.encode(frame))
 
     def hold(self, what: Any) -> None:
         """Handle no more of this client's frames until ``release(what)``."""
@@ -278,7 +173,7 @@ class Client:
 
     def log(self, level: int, text: str, mid: Any = None) -> None:
         prefix = f"[Client {self.id}]" + (f" [id: {mid}]" if mid is not None else "")
-        self.broker.log(level, f"{prefix} {text}")
+        self.bus.rosout(level, "/rosbridge_websocket", f"{prefix} {text}")
 
     def handle(self, raw: str | bytes) -> None:
         if self.busy:
@@ -308,8 +203,8 @@ class Client:
             self.log(8, f"{op}: {type(exc).__name__}: {exc}", mid if isinstance(mid, str | int) else None)
 
     def _topic_type(self, topic: str, claimed: str | None) -> str:
-        known = self.broker.types.get(topic)
-        dialect = self.broker.dialect
+        known = self.bus.types.get(topic)
+        dialect = self.bus.dialect
         if claimed is not None and known is not None and messages.canonical(claimed) != messages.canonical(known):
             raise ProtocolError(
                 f"Tried to register topic {topic} with type {claimed} but it is already established "
@@ -329,12 +224,12 @@ class Client:
         _check(frame, [(True, "topic", str), (True, "type", str), (False, "latch", bool),
                        (False, "queue_size", int)])
         topic = frame["topic"]
-        self.broker.types[topic] = self._topic_type(topic, frame["type"])
-        self.broker.publishers[topic].add(self.id)
+        self.bus.types[topic] = self._topic_type(topic, frame["type"])
+        self.bus.publishers[topic].add(self.id)
 
     def op_unadvertise(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str)])
-        self.broker.publishers[frame["topic"]].discard(self.id)
+        self.bus.publishers[frame["topic"]].discard(self.id)
 
     def op_publish(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str), (False, "latch", bool), (False, "queue_size", int)])
@@ -347,28 +242,28 @@ class Client:
             msg = raw_msg  # a type the simulator has no schema for: passed through unchecked
         else:
             raise messages.ConversionError(f"Expected a dict for a {msg_type} message")
-        self.broker.publishers[topic].add(self.id)
-        self.broker.deliver(topic, msg, bool(frame.get("latch", False)))
+        self.bus.publishers[topic].add(self.id)
+        self.bus.deliver(topic, msg, bool(frame.get("latch", False)))
 
     def op_subscribe(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str), (False, "type", str), (False, "throttle_rate", int),
                        (False, "fragment_size", int), (False, "queue_length", int),
                        (False, "compression", str)])
         topic = frame["topic"]
-        self.broker.types[topic] = self._topic_type(topic, frame.get("type"))
-        sub = self.broker.subs[topic].setdefault(self.id, Subscription(self))
+        self.bus.types[topic] = self._topic_type(topic, frame.get("type"))
+        sub = self.bus.subs[topic].setdefault(self.id, Subscription(self))
         sub.params[mid] = (max(0, frame.get("throttle_rate", 0)), max(0, frame.get("queue_length", 0)))
         sub.raw = frame.get("compression") == "cbor-raw"
         sub.update()
-        latched = self.broker.latched_frame(topic)
+        latched = self.bus.latched_frame(topic)
         if latched is not None:
-            self.send(self.broker.dialect.raw_frame(topic, self.broker.types[topic], json.loads(latched)["msg"])
+            self.send(self.bus.dialect.raw_frame(topic, self.bus.types[topic], json.loads(latched)["msg"])
                       if sub.raw else latched)
 
     def op_unsubscribe(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "topic", str)])
         topic = frame["topic"]
-        sub = self.broker.subs.get(topic, {}).get(self.id)
+        sub = self.bus.subs.get(topic, {}).get(self.id)
         if sub is None:
             return
         if mid is None:
@@ -378,21 +273,21 @@ class Client:
         if sub.params:
             sub.update()
         else:
-            self.broker.unsubscribe(self.id, topic)
+            self.bus.unsubscribe(self.id, topic)
 
     def op_call_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str), (False, "fragment_size", int), (False, "compression", str)])
         name = frame["service"]
         args = frame.get("args", {})
-        owner = self.broker.client_services.get(name)
+        owner = self.bus.client_services.get(name)
         if owner is not None:
-            call_id = next(self.broker.call_ids)
-            self.broker.pending_calls[call_id] = (self, mid, name)
-            if self.broker.dialect.ros2 and not self.broker.services_in_new_thread:
+            call_id = next(self.bus.call_ids)
+            self.bus.pending_calls[call_id] = (self, mid, name)
+            if self.bus.dialect.ros2 and not self.bus.services_in_new_thread:
                 self.hold(call_id)  # a service that never answers wedges this client
             owner.reply({"op": "call_service", "id": call_id, "service": name, "args": args})
             return
-        entry = self.broker.services.get(name)
+        entry = self.bus.services.get(name)
         try:
             if entry is None:
                 raise ServiceError(f"Service {name} does not exist")
@@ -401,7 +296,7 @@ class Client:
             values: Any = handler(request)
             ok = True
         except NoAnswer:
-            if self.broker.dialect.ros2 and not self.broker.services_in_new_thread:
+            if self.bus.dialect.ros2 and not self.bus.services_in_new_thread:
                 self.hold(("no answer", mid))  # wedged for good
             return
         except (ServiceError, messages.ConversionError) as exc:
@@ -411,16 +306,16 @@ class Client:
 
     def op_advertise_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str), (True, "type", str)])
-        self.broker.client_services[frame["service"]] = self
+        self.bus.client_services[frame["service"]] = self
 
     def op_unadvertise_service(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str)])
-        if self.broker.client_services.get(frame["service"]) is self:
-            del self.broker.client_services[frame["service"]]
+        if self.bus.client_services.get(frame["service"]) is self:
+            del self.bus.client_services[frame["service"]]
 
     def op_service_response(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "service", str), (True, "result", bool)])
-        pending = self.broker.pending_calls.pop(mid, None)
+        pending = self.bus.pending_calls.pop(mid, None)
         if pending is None:
             return
         caller, caller_id, name = pending
@@ -438,10 +333,10 @@ class Client:
     def op_send_action_goal(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "action", str), (True, "action_type", str), (False, "args", dict),
                        (False, "feedback", bool)])
-        endpoint = self.broker.actions.get(frame["action"])
+        endpoint = self.bus.actions.get(frame["action"])
         if endpoint is None or messages.canonical(frame["action_type"]) != messages.canonical(endpoint.type):
             raise ProtocolError(f"Action {frame['action']} of type {frame['action_type']} is not available")
-        if not self.broker.goals_in_new_thread:
+        if not self.bus.goals_in_new_thread:
             self.hold(("goal", mid))  # released by the goal's action_result
         try:
             endpoint.send_goal(self, mid, frame.get("args", {}))
@@ -451,6 +346,59 @@ class Client:
 
     def op_cancel_action_goal(self, frame: dict[str, Any], mid: Any) -> None:
         _check(frame, [(True, "action", str)])
-        endpoint = self.broker.actions.get(frame["action"])
+        endpoint = self.bus.actions.get(frame["action"])
         if endpoint is not None:
             endpoint.cancel_goal(self, mid)
+
+
+class RosbridgeServer:
+    def __init__(self, bus: Bus, clients_changed: Callable[[], None]) -> None:
+        self.bus = bus
+        self.clients_changed = clients_changed
+        self.server: Server | None = None
+        self.port = 0
+        self.connections: set[ServerConnection] = set()
+
+    async def start(self, host: str, port: int) -> None:
+        # rosbridge: no permessage-deflate, no pings, no practical frame size limit
+        self.server = await serve(
+            self._handle, host, port, compression=None, ping_interval=None, max_size=2**28,
+            max_queue=None, close_timeout=1.0, reuse_address=True,
+        )
+        self.port = self.server.sockets[0].getsockname()[1]
+
+    async def stop(self) -> None:
+        if self.server is None:
+            return
+        self.server.close(close_connections=False)
+        for ws in list(self.connections):
+            ws.transport.abort()  # the robot vanishing: clients see the TCP connection drop
+        try:
+            await asyncio.wait_for(self.server.wait_closed(), 3.0)
+        except TimeoutError:
+            log.warning("websocket server did not close within 3 s")
+
+    async def _handle(self, ws: ServerConnection) -> None:
+        self.connections.add(ws)
+        bus = self.bus
+        address = ws.remote_address[0] if ws.remote_address else ""
+        client = Client(bus, ws.send, address)
+        bus.clients[client.id] = client
+        self.clients_changed()
+        writer = asyncio.get_running_loop().create_task(self._write(client))
+        try:
+            async for raw in ws:
+                client.handle(raw)
+        except ConnectionClosed:
+            pass
+        finally:
+            client.closed = True
+            writer.cancel()
+            self.connections.discard(ws)
+            bus.disconnect(client)
+            self.clients_changed()
+
+    @staticmethod
+    async def _write(client: Client) -> None:
+        with contextlib.suppress(ConnectionClosed):
+            await client.run_writer()

@@ -5,13 +5,12 @@ It owns what the nodes share — the map, the base's body, the random source, th
 RosAria, amcl + map_server + move_base + cyborg_navigation, the emotion system, the audio
 and visual nodes, the controller (state machine, behaviours), the commander and rosbridge's
 rosapi. The websocket server and web_video_server look-alike (camera.py) see it only
-through the broker and camera.CameraHost. How to add a node: README.md.
+through the bus and camera.CameraHost. How to add a node: README.md.
 """
 
 from __future__ import annotations
 
 import asyncio
-import collections
 import logging
 import random
 import time
@@ -23,18 +22,17 @@ from . import messages
 from .bus import Bus, Clock, SimNode
 from .camera import VideoServer
 from .messages import DIALECTS
-from .nodes.audiovisual import AudioVisualNode, Microphone, Speaker
+from .nodes.audiovisual import AudioVisualNode
 from .nodes.base import BaseNode
 from .nodes.bridge import BridgeNode
-from .nodes.controller import CommanderNode, ControllerNode, StateMachine
+from .nodes.controller import CommanderNode, ControllerNode
 from .nodes.costmaps import CostmapNode
 from .nodes.diagnostics import DiagnosticsNode
 from .nodes.emotion import EmotionNode
 from .nodes.laser import Laser
 from .nodes.localisation import LocalisationNode
 from .nodes.navigation import NavigationNode
-from .protocol import Broker
-from .server import RosbridgeServer
+from .protocol import RosbridgeServer
 from .world import Base, build
 
 log = logging.getLogger("simulator")
@@ -78,12 +76,10 @@ class SimRobot:
         self.rng = random.Random(seed)
         self.world = build(map_name, seed)
         x, y, yaw = self.world.start
-        self.base = Base(self.world, x, y, yaw)  # the servers see base, world and broker
+        self.base = Base(self.world, x, y, yaw)  # the servers see base, world and bus
         self.clock = Clock(time_scale)
         self.ros = ros
-        self.broker = Broker(lambda level, text: self.bus.rosout(level, "/rosbridge_websocket", text),
-                             DIALECTS[ros], goals_in_new_thread, services_in_new_thread)
-        self.bus = Bus(self.broker, self.clock)
+        self.bus = Bus(self.clock, DIALECTS[ros], goals_in_new_thread, services_in_new_thread)
         for t in ri.topics(ros):
             self.bus.declare(t.name, t.type)
 
@@ -95,7 +91,7 @@ class SimRobot:
         self.nav_node = self.add(NavigationNode(self.base, self.world, self.rng, nav_speed, ros))
         self.add(LocalisationNode(self.base, self.rng))
         self.add(Laser(self.world, self.base))
-        self.add(CostmapNode(self.base, self.world, lambda: self.nav_node.navigator.active))
+        self.add(CostmapNode(self.base, self.world, lambda: self.nav_node.active))
         self.emotion_node = self.add(EmotionNode(self.rng))
         self.av_node = self.add(AudioVisualNode(tts_s_per_char, tts_min_s, clip_s, mic_tone_hz, mic_coding))
         self.controller = self.add(ControllerNode(self.rng, self.nav_node, self.av_node, self.emotion_node,
@@ -104,7 +100,7 @@ class SimRobot:
         self.commander = self.add(CommanderNode(commander_pause_s))
         self.add(DiagnosticsNode(self.base_node))
         self.bridge = self.add(BridgeNode(self.rng, lambda: self.nodes))
-        self.server = RosbridgeServer(self.broker, self.bridge.publish_client_count)  # both listen from start()
+        self.server = RosbridgeServer(self.bus, self.bridge.publish_client_count)  # both listen from start()
         self.video = VideoServer(self)
 
     # --- lifecycle -------------------------------------------------------------------
@@ -125,7 +121,7 @@ class SimRobot:
         for node in self.nodes:
             node.start(self.bus)
         # Encode the latched map now: a 4000 x 4000 map takes seconds, better before than mid-session.
-        self.broker.latched_frame(self.bus.topic("map").name)
+        self.bus.latched_frame(self.bus.topic("map").name)
         await self.server.start(self.host, self.port)
         self.port = self.server.port
         await self.video.start(self.host, self.video_port)
@@ -164,44 +160,44 @@ class SimRobot:
     # --- what the servers see (camera.CameraHost) -----------------------------------------
 
     def plan(self) -> list[tuple[float, float]]:
-        return self.nav_node.navigator.remaining()
+        return self.nav_node.remaining()
 
     def caption(self) -> str:
-        return f"state={self.sm.state} emotion={self.emotions.name}"
+        return f"state={self.controller.sm.state} emotion={self.emotion_node.name}"
 
     def publish_external(self, topic: str, msg: dict[str, Any], count: int = 1) -> int:
         """Publish ``msg`` to the topic's subscribers as if a robot node sent it (benches inject bursts)."""
-        msg_type = self.broker.types.get(topic)
+        msg_type = self.bus.types.get(topic)
         if msg_type is not None and messages.known(msg_type):
             msg = messages.normalize(msg_type, msg)
         for _ in range(count):
-            self.broker.publish(topic, msg)
+            self.bus.publish_name(topic, msg)
         return count
 
     # --- introspection (tests, benches, /sim/introspect) --------------------------------
 
     def subscription_count(self, topic_name: str) -> int:
-        return self.broker.subscription_count(topic_name)
+        return self.bus.subscription_count(topic_name)
 
     def received(self, topic_name: str) -> list[dict[str, Any]]:
-        return [r.msg for r in self.broker.received_msgs.get(topic_name, ())]
+        return [r.msg for r in self.bus.received_msgs.get(topic_name, ())]
 
     def received_with_times(self, topic_name: str, last: int | None = None) -> list[dict[str, Any]]:
-        items = list(self.broker.received_msgs.get(topic_name, ()))
+        items = list(self.bus.received_msgs.get(topic_name, ()))
         if last is not None:
             items = items[-last:] if last > 0 else []
         return [{"t": r.t, "msg": r.msg} for r in items]
 
     def received_count(self, topic_name: str) -> int:
-        return self.broker.received_counts[topic_name]
+        return self.bus.received_counts[topic_name]
 
     def snapshot(self) -> dict[str, Any]:
-        b, w, broker, nav, av, base = self.base, self.world, self.broker, self.nav_node, self.av_node, self.base_node
+        b, w, bus, nav, av, base = self.base, self.world, self.bus, self.nav_node, self.av_node, self.base_node
         goal = nav.move_base.current
         return {
-            "subscriptions": {t: broker.subscription_count(t) for t in sorted(broker.subs)},
-            "received_counts": dict(broker.received_counts),
-            "clients": len(broker.clients),
+            "subscriptions": {t: bus.subscription_count(t) for t in sorted(bus.subs)},
+            "received_counts": dict(bus.received_counts),
+            "clients": len(bus.clients),
             "url": self.url,
             "video_port": self.video_port,
             "video_streams": self.video.streams,
@@ -211,41 +207,12 @@ class SimRobot:
                 "pose": {"x": b.x, "y": b.y, "yaw": b.yaw}, "v": b.v, "w": b.w, "motors": b.motors,
                 "bumped": b.bumped, "battery": {"soc": base.soc, "voltage": base.voltage(),
                                                 "recharge_state": base.recharge_state},
-                "smach_state": self.sm.state, "smach_top": self.sm.top,
-                "emotion": {"name": self.emotions.name, "pad": list(self.emotions.pad)},
-                "emotion_system": self.emotions.enabled, "mode": self.commander.mode, "dome": av.dome_mode,
+                "smach_state": self.controller.sm.state, "smach_top": self.controller.sm.top,
+                "emotion": {"name": self.emotion_node.name, "pad": list(self.emotion_node.pad)},
+                "emotion_system": self.emotion_node.enabled, "mode": self.commander.mode, "dome": av.dome_mode,
                 "tts_queue": av.audio.pending(), "tts_spoken": av.audio.done_count,
                 "playing": av.audio.playing, "current_location": nav.current_location,
                 "goal": None if goal is None else {"id": goal.id, "status": goal.status},
-                "navigating": nav.navigator.active,
+                "navigating": nav.active,
             },
         }
-
-    # --- the nodes' state, by the names tests and benches use ---------------------------
-
-    def fire(self, event: str) -> bool:
-        return self.controller.fire(event)
-
-    def rosout(self, level: int, node: str, text: str) -> None:
-        self.bus.rosout(level, node, text)
-
-    @property
-    def rosout_log(self) -> collections.deque[dict[str, Any]]:
-        return self.bus.rosout_log
-
-    @property
-    def sm(self) -> StateMachine:
-        return self.controller.sm
-
-    @property
-    def emotions(self) -> EmotionNode:
-        return self.emotion_node
-
-    @property
-    def mic(self) -> Microphone:
-        return self.av_node.mic
-
-    @property
-    def speaker(self) -> Speaker:
-        return self.av_node.speaker
-

@@ -16,8 +16,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from .. import messages
-from ..bus import Bus, SimNode
-from ..protocol import NoAnswer, ServiceError
+from ..bus import Bus, NoAnswer, ServiceError, SimNode
 
 BRIDGE = "/rosbridge_websocket"
 
@@ -45,20 +44,19 @@ class BridgeNode(SimNode):
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        broker = bus.broker
         bus.declare("/connected_clients", "rosbridge_msgs/ConnectedClients")
-        bus.answer("rosapi_topics", lambda r: {"topics": sorted(broker.types),
-                                              "types": [broker.types[n] for n in sorted(broker.types)]})
+        bus.answer("rosapi_topics", lambda r: {"topics": sorted(bus.types),
+                                              "types": [bus.types[n] for n in sorted(bus.types)]})
         bus.answer_name("/rosapi/topics_and_raw_types", "rosapi/TopicsAndRawTypes", lambda r: {
-            "topics": sorted(broker.types), "types": [broker.types[n] for n in sorted(broker.types)],
-            "typedefs_full_text": [bus.dialect.full_text(broker.types[n]) for n in sorted(broker.types)]})
-        bus.answer("rosapi_topic_type", lambda r: {"type": broker.types.get(r["topic"], "")})
-        bus.answer("rosapi_services", lambda r: {"services": sorted(broker.services)})
+            "topics": sorted(bus.types), "types": [bus.types[n] for n in sorted(bus.types)],
+            "typedefs_full_text": [bus.dialect.full_text(bus.types[n]) for n in sorted(bus.types)]})
+        bus.answer("rosapi_topic_type", lambda r: {"type": bus.types.get(r["topic"], "")})
+        bus.answer("rosapi_services", lambda r: {"services": sorted(bus.services)})
         bus.answer("rosapi_get_time", lambda r: {"time": messages.stamp()})
         bus.answer_name("/rosapi/topics_for_type", "rosapi/TopicsForType", lambda r: {
-            "topics": sorted(t for t, ty in broker.types.items() if ty == r["type"])})
+            "topics": sorted(t for t, ty in bus.types.items() if ty == r["type"])})
         bus.answer_name("/rosapi/service_type", "rosapi/ServiceType", lambda r: {
-            "type": broker.services.get(r["service"], ("",))[0]})
+            "type": bus.services.get(r["service"], ("",))[0]})
         bus.answer_name("/rosapi/get_param", "rosapi/GetParam", lambda r: {
             "value": json.dumps(self.params[r["name"]]) if r["name"] in self.params else r["default"]})
         bus.answer_name("/rosapi/has_param", "rosapi/HasParam", lambda r: {"exists": r["name"] in self.params})
@@ -73,19 +71,19 @@ class BridgeNode(SimNode):
                             lambda r: {"version": 2, "distro": "jazzy"})
             # rosbridge 2.1.0's rosapi dies on these (upstream bugs): its services vanish, the call is never answered
             for name in ("/rosapi/get_param_names", "/rosapi/message_details"):
-                broker.services[name] = (broker.services[name][0], self._crash_rosapi)
+                bus.services[name] = (bus.services[name][0], self._crash_rosapi)
         bus.every(8.0, lambda: bus.rosout(2, *self.rng.choice(CHATTER)))
         self.publish_client_count()
 
     def _crash_rosapi(self, request: dict[str, Any]) -> dict[str, Any]:
-        services = self.bus.broker.services
+        services = self.bus.services
         for name in [n for n in services if n.startswith("/rosapi/")]:
             del services[name]
         self.bus.rosout(16, "/rosapi", "rosapi_node crashed")
         raise NoAnswer
 
     def publish_client_count(self) -> None:
-        clients = self.bus.broker.clients
+        clients = self.bus.clients
         self.bus.publish("client_count", {"data": len(clients)})
         self.bus.publish_name("/connected_clients", {"clients": [
             {"ip_address": c.address, "connection_time": messages.stamp(c.connected_at)}
@@ -107,8 +105,7 @@ class BridgeNode(SimNode):
         return max(found, key=len) if found else None
 
     def publishers(self, topic: str) -> list[str]:
-        broker = self.bus.broker
-        if topic not in broker.types:
+        if topic not in self.bus.types:
             return []
         if topic == self.bus.topic("rosout").name:
             return sorted(set(self._graph_nodes()))
@@ -118,27 +115,25 @@ class BridgeNode(SimNode):
         for node in self.nodes():
             if any(self.bus.topic(key).name == topic for key in node.publishes):
                 found.add(self._owner(topic) or (node.names[0] if node.names else ""))
-        if broker.publishers.get(topic):
+        if self.bus.publishers.get(topic):
             found.add(BRIDGE)
-        if not found and topic not in broker.handlers:
+        if not found and topic not in self.bus.handlers:
             found.add(self._owner(topic) or "")
         found.discard("")  # no node to name
         return sorted(found)
 
     def subscribers(self, topic: str) -> list[str]:
-        broker = self.bus.broker
         found: set[str] = set()
-        if broker.subs.get(topic):
+        if self.bus.subs.get(topic):
             found.add(BRIDGE)
-        if broker.handlers.get(topic):
+        if self.bus.handlers.get(topic):
             found.add(self._owner(topic) or "/cyborg_controller")
         return sorted(found)
 
     def node_details(self, node: str) -> dict[str, Any]:
-        broker = self.bus.broker
-        topics = sorted(broker.types)
+        topics = sorted(self.bus.types)
         return {
             "publishing": [t for t in topics if node in self.publishers(t)],
             "subscribing": [t for t in topics if node in self.subscribers(t)],
-            "services": sorted(s for s in broker.services if s.startswith(node + "/")),
+            "services": sorted(s for s in self.bus.services if s.startswith(node + "/")),
         }

@@ -10,7 +10,6 @@ import math
 import random
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from robot import interface as ri
@@ -18,75 +17,14 @@ from robot import interface as ri
 from .. import messages, world
 from ..actions import ABORTED, ACTIVE, PREEMPTED, SUCCEEDED, ActionServer, Goal, Ros2Action
 from ..bus import Bus, SimNode
-from ..world import Base, body_pose, grid, pose, wrap
+from ..world import body_pose, grid, pose, wrap
 
 NAV_NODE = "/cyborg_navigation"
-
-
-@dataclass
-class Navigator:
-    base: Base
-    max_v: float = 0.6
-    max_w: float = 1.2
-    lookahead: float = 0.4
-    xy_tolerance: float = 0.15
-    yaw_tolerance: float = 0.12
-    patience_s: float = 10.0  # no progress for this long: give up (move_base's controller patience)
-
-    def __post_init__(self) -> None:
-        self.path: list[tuple[float, float]] = []
-        self.goal_yaw = 0.0
-        self.idx = 0
-        self.active = False
-        self._best = math.inf
-        self._best_t = 0.0
-
-    def start(self, path: list[tuple[float, float]], goal_yaw: float, now: float) -> None:
-        self.path, self.goal_yaw, self.idx, self.active = path, goal_yaw, 0, True
-        self._best, self._best_t = math.inf, now
-
-    def stop(self, now: float) -> None:
-        if self.active:
-            self.active = False
-            self.base.command(0.0, 0.0, now)
-
-    def remaining(self) -> list[tuple[float, float]]:
-        if not self.active:
-            return []
-        return [(self.base.x, self.base.y), *self.path[self.idx + 1:]]
-
-    def step(self, now: float) -> int | None:
-        """Drive toward the goal; None while under way, then actionlib's SUCCEEDED or ABORTED."""
-        if not self.active:
-            return None
-        b = self.base
-        gx, gy = self.path[-1]
-        dist = math.hypot(gx - b.x, gy - b.y)
-        if dist < self._best - 0.05:
-            self._best, self._best_t = dist, now
-        elif now - self._best_t > self.patience_s:
-            self.stop(now)
-            return ABORTED
-        if dist < self.xy_tolerance:
-            err = wrap(self.goal_yaw - b.yaw)
-            if abs(err) < self.yaw_tolerance:
-                self.stop(now)
-                return SUCCEEDED
-            self._best_t = now
-            b.command(0.0, max(-self.max_w, min(self.max_w, 2.0 * err)), now)
-            return None
-        while self.idx < len(self.path) - 1 and math.hypot(self.path[self.idx][0] - b.x,
-                                                           self.path[self.idx][1] - b.y) < self.lookahead:
-            self.idx += 1
-        tx, ty = self.path[self.idx]
-        err = wrap(math.atan2(ty - b.y, tx - b.x) - b.yaw)
-        if abs(err) > 0.8:
-            b.command(0.0, math.copysign(self.max_w, err), now)
-        else:
-            v = min(self.max_v, 0.3 + dist) * max(0.0, math.cos(err))
-            b.command(v, max(-self.max_w, min(self.max_w, 2.5 * err)), now)
-        return None
-
+MAX_W = 1.2
+LOOKAHEAD_M = 0.4
+XY_TOLERANCE_M = 0.15
+YAW_TOLERANCE = 0.12
+PATIENCE_S = 10.0  # no progress for this long: give up (move_base's controller patience)
 
 
 class NavigationNode(SimNode):
@@ -99,33 +37,29 @@ class NavigationNode(SimNode):
         self.world = world_map
         self.rng = rng
         self.planner = world.Planner(world_map)
-        self.navigator = Navigator(body, max_v=nav_speed)
+        self.max_v = nav_speed
+        self.path: list[tuple[float, float]] = []  # the path under way, followed by pure pursuit
+        self.goal_yaw = 0.0
+        self.idx = 0
+        self.active = False
+        self._best = math.inf
+        self._best_t = 0.0
         self.current_location = ""
         self._map_load_time = messages.stamp()
         mb, nav = ri.action("move_base", ros), ri.action("navigation", ros)
 
-        def publish(name: str, msg: dict[str, Any], latch: bool = False) -> None:
-            self.bus.publish_name(name, msg, latch)
-
-        self.move_base = ActionServer(mb.name, mb.type, publish, self._move_base_goal, self._move_base_cancel)
-        self.navigation = ActionServer(nav.name, nav.type, publish, self._navigation_goal, self._navigation_cancel)
-        # ROS 2: Nav2's NavigateToPose (goal {pose, behavior_tree}) and the navigation orders, as action ops
-        self.ros2_actions = [] if ros == ri.ROS1 else [
-            Ros2Action(self.move_base, mb.type, publish, lambda g: {"target_pose": g["pose"]}, self._nav2_feedback),
-            Ros2Action(self.navigation, nav.type, publish),
-        ]
+        if ros == ri.ROS1:
+            self.move_base = ActionServer(mb.name, mb.type, self._move_base_goal, self._move_base_cancel)
+            self.navigation = ActionServer(nav.name, nav.type, self._navigation_goal, self._navigation_cancel)
+        else:  # Nav2's NavigateToPose (goal {pose, behavior_tree}) and the navigation orders, as action ops
+            self.move_base = Ros2Action(mb.name, mb.type, self._move_base_goal, self._move_base_cancel,
+                                        lambda g: {"target_pose": g["pose"]}, self._nav2_feedback)
+            self.navigation = Ros2Action(nav.name, nav.type, self._navigation_goal, self._navigation_cancel)
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        for action in self.ros2_actions:
-            bus.broker.actions[action.server.name] = action
-            bus.declare(action.server.status_topic, ri.ACTION_STATUS_TYPE)
-            bus.answer_name(action.cancel_service, ri.ACTION_CANCEL_TYPE, action.cancel_service_call)
-        for server in () if self.ros2_actions else (self.move_base, self.navigation):
-            for name, msg_type in server.topics.items():
-                bus.declare(name, msg_type)
-            bus.on_name(f"{server.name}/goal", server.receive_goal)
-            bus.on_name(f"{server.name}/cancel", server.receive_cancel)
+        self.move_base.install(bus)
+        self.navigation.install(bus)
         bus.on("initialpose", self._initialpose)
         bus.on("move_base_simple_goal", self._simple_goal)
         bus.latch_lazily("map", self._map_message)
@@ -170,7 +104,7 @@ class NavigationNode(SimNode):
         self.bus.rosout(2, "/amcl", f"Setting pose ({time.time():.6f}): {p['position']['x']:.3f} "
                                     f"{p['position']['y']:.3f} {yaw:.3f}")
         goal = self.move_base.current
-        if goal is not None and self.navigator.active:
+        if goal is not None and self.active:
             self._move_base_goal(goal)  # replan from the new pose
 
     def _simple_goal(self, m: dict[str, Any]) -> None:
@@ -191,11 +125,11 @@ class NavigationNode(SimNode):
             return
         self.bus.rosout(2, "/move_base",
                         f"Got new plan ({len(path)} poses, {1000 * (time.perf_counter() - t0):.0f} ms)")
-        self.navigator.start(path, yaw, self.bus.clock.now())
+        self._follow(path, yaw, self.bus.clock.now())
         self._pub_plan(force=True)
 
     def _move_base_cancel(self, goal: Goal) -> None:
-        self.navigator.stop(self.bus.clock.now())
+        self._halt(self.bus.clock.now())
         self._pub_plan(force=True)
         self._finish_move_base(goal)
 
@@ -244,7 +178,7 @@ class NavigationNode(SimNode):
             self.cancel(mb)
 
     def _step(self, now: float, dt: float) -> None:
-        result = self.navigator.step(now)
+        result = self._drive(now)
         goal = self.move_base.current
         if result is not None and goal is not None:
             if result == SUCCEEDED:
@@ -253,6 +187,54 @@ class NavigationNode(SimNode):
                 self.bus.rosout(8, "/move_base", "Aborting because a valid control could not be found.")
                 self._finish_move_base(goal, ABORTED, "Robot is unable to make progress")
             self._pub_plan(force=True)
+
+    # --- path following ------------------------------------------------------------------
+
+    def _follow(self, path: list[tuple[float, float]], goal_yaw: float, now: float) -> None:
+        self.path, self.goal_yaw, self.idx, self.active = path, goal_yaw, 0, True
+        self._best, self._best_t = math.inf, now
+
+    def _halt(self, now: float) -> None:
+        if self.active:
+            self.active = False
+            self.body.command(0.0, 0.0, now)
+
+    def remaining(self) -> list[tuple[float, float]]:
+        if not self.active:
+            return []
+        return [(self.body.x, self.body.y), *self.path[self.idx + 1:]]
+
+    def _drive(self, now: float) -> int | None:
+        """Drive toward the goal; None while under way, then actionlib's SUCCEEDED or ABORTED."""
+        if not self.active:
+            return None
+        b = self.body
+        gx, gy = self.path[-1]
+        dist = math.hypot(gx - b.x, gy - b.y)
+        if dist < self._best - 0.05:
+            self._best, self._best_t = dist, now
+        elif now - self._best_t > PATIENCE_S:
+            self._halt(now)
+            return ABORTED
+        if dist < XY_TOLERANCE_M:
+            err = wrap(self.goal_yaw - b.yaw)
+            if abs(err) < YAW_TOLERANCE:
+                self._halt(now)
+                return SUCCEEDED
+            self._best_t = now
+            b.command(0.0, max(-MAX_W, min(MAX_W, 2.0 * err)), now)
+            return None
+        while self.idx < len(self.path) - 1 and math.hypot(self.path[self.idx][0] - b.x,
+                                                           self.path[self.idx][1] - b.y) < LOOKAHEAD_M:
+            self.idx += 1
+        tx, ty = self.path[self.idx]
+        err = wrap(math.atan2(ty - b.y, tx - b.x) - b.yaw)
+        if abs(err) > 0.8:
+            b.command(0.0, math.copysign(MAX_W, err), now)
+        else:
+            v = min(self.max_v, 0.3 + dist) * max(0.0, math.cos(err))
+            b.command(v, max(-MAX_W, min(MAX_W, 2.5 * err)), now)
+        return None
 
     # --- periodic publishers ---------------------------------------------------------------
 
@@ -265,21 +247,21 @@ class NavigationNode(SimNode):
 
     def _pub_action_status(self) -> None:
         for server in (self.move_base, self.navigation):
-            if self.bus.broker.wants(server.status_topic):
+            if self.bus.subs.get(server.status_topic):
                 server.publish_status()
             else:
                 server.status_message()  # still expire old goals
 
     def _pub_plan(self, force: bool = False) -> None:
-        if not self.bus.wants("plan") or not (force or self.navigator.active):
+        if not self.bus.wants("plan") or not (force or self.active):
             return
         poses = [{"header": messages.header(ri.MAP_FRAME), "pose": pose(x, y, 0.0)}
-                 for x, y in self.navigator.remaining()]
+                 for x, y in self.remaining()]
         self.bus.publish("plan", {"header": messages.header(ri.MAP_FRAME), "poses": poses})
 
     def _nav_feedback(self) -> None:
         goal = self.move_base.current
-        if goal is not None and self.navigator.active:
+        if goal is not None and self.active:
             self.move_base.feedback(goal, {"base_position": {"header": messages.header(ri.MAP_FRAME),
                                                              "pose": body_pose(self.body)}})
         ngoal = self.navigation.current
@@ -297,12 +279,11 @@ class NavigationNode(SimNode):
         self.bus.publish("current_location", {"data": here})
 
     def _nav2_feedback(self, goal: Goal, feedback: dict[str, Any]) -> dict[str, Any]:
-        nav = self.navigator
-        points = [(self.body.x, self.body.y), *nav.path[nav.idx:]] if nav.active else []
+        points = [(self.body.x, self.body.y), *self.path[self.idx:]] if self.active else []
         left = sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(points))
         return {"current_pose": feedback["base_position"],
                 "navigation_time": messages.duration(self.bus.clock.now() - goal.data.get("t0", self.bus.clock.now())),
-                "estimated_time_remaining": messages.duration(left / max(self.navigator.max_v, 1e-3)),
+                "estimated_time_remaining": messages.duration(left / max(self.max_v, 1e-3)),
                 "number_of_recoveries": 0, "distance_remaining": left}
 
     def _map_message(self) -> dict[str, Any]:

@@ -56,8 +56,8 @@ async def test_it_raises_shows_keeps_and_hands_over_alerts(link, sim, raiser, vi
     battery = on_now(await alerts_frame(communicator, lambda on: "battery_low" in on))["battery_low"]
     assert battery["severity"] == "critical" and battery["text"] == "Battery low: 8 %"
 
-    sim.call(lambda: sim.robot.rosout(16, "/move_base", "planner crashed"))
-    sim.call(lambda: sim.robot.rosout(8, "/move_base", "still broken"))
+    sim.call(lambda: sim.robot.bus.rosout(16, "/move_base", "planner crashed"))
+    sim.call(lambda: sim.robot.bus.rosout(8, "/move_base", "still broken"))
     log = on_now(await alerts_frame(communicator, lambda on: on.get("log:/move_base", {}).get("count") == 2))
     assert log["log:/move_base"]["text"] == "ERROR from /move_base: still broken"
 
@@ -107,7 +107,7 @@ async def test_an_alert_acknowledged_before_it_is_kept_is_kept_acknowledged(link
 
     await async_wait_until(hearing, timeout=10, what="the raiser hearing the robot")
     engine = alerts_engine._engines[link]
-    sim.call(lambda: sim.robot.rosout(8, "/laser", "driver died"))
+    sim.call(lambda: sim.robot.bus.rosout(8, "/laser", "driver died"))
     await async_wait_until(lambda: "log:/laser" in engine.book.active, timeout=10, what="the alert raised")
     on = engine.book.active["log:/laser"]
     assert not await Alert.objects.filter(id=uuid.UUID(on.id)).aexists()

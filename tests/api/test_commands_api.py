@@ -30,7 +30,7 @@ def test_it_switches_to_manual_with_the_server_strategy(operator_api, robot, set
 
 def test_it_switches_to_behaviour_with_the_robot_strategy(operator_api, robot, settings):
     settings.MODE_COMMANDER = "robot"
-    robot.call(lambda: robot.robot.emotions.__setattr__("enabled", False))
+    robot.call(lambda: robot.robot.emotion_node.__setattr__("enabled", False))
     res = operator_api.post("/api/robot/mode/", {"mode": "behaviour"}, format="json")
     assert res.status_code == 200, res.json()
     state = wait_state(robot, lambda s: s["smach_top"] == "behaviour", "state behaviour")
@@ -68,7 +68,7 @@ def test_it_speaks_trimmed_text(operator_api, robot):
 
 
 def test_it_sets_an_emotion_preset(operator_api, robot):
-    robot.call(lambda: robot.robot.emotions.__setattr__("enabled", False))  # no drift during the check
+    robot.call(lambda: robot.robot.emotion_node.__setattr__("enabled", False))  # no drift during the check
     res = operator_api.post("/api/robot/emotion/", {"emotion": "puzzled"}, format="json")
     assert res.status_code == 200
     state = wait_state(robot, lambda s: s["emotion"]["name"] == "puzzled", "emotion puzzled")
@@ -77,7 +77,7 @@ def test_it_sets_an_emotion_preset(operator_api, robot):
 
 @pytest.mark.parametrize("on", [False, True])
 def test_it_switches_the_emotion_system(operator_api, robot, on):
-    robot.call(lambda: robot.robot.emotions.__setattr__("enabled", not on))
+    robot.call(lambda: robot.robot.emotion_node.__setattr__("enabled", not on))
     res = operator_api.post("/api/robot/emotion-system/", {"on": on}, format="json")
     assert res.status_code == 200
     wait_state(robot, lambda s: s["emotion_system"] is on, f"emotion system {on}")
@@ -126,7 +126,7 @@ def test_it_answers_504_when_the_motors_service_does_not_answer(operator_api, ro
     # A node that advertises the service and never answers it.
     with connect(robot.url) as silent:
         silent.send('{"op": "advertise_service", "service": "/slow/enable", "type": "std_srvs/Empty"}')
-        wait_until(lambda: robot.call(lambda: "/slow/enable" in robot.robot.broker.client_services),
+        wait_until(lambda: robot.call(lambda: "/slow/enable" in robot.robot.bus.client_services),
                    what="service advertised")
         settings.ROBOT_SERVICES = {"enable_motors": "/slow/enable"}
         settings.ROBOT_REQUEST_TIMEOUT_S = 0.8

@@ -29,7 +29,8 @@ async def test_listening_relays_the_robot_microphone_as_binary_frames(link, sim,
     assert dominant_hz(b"".join(ears.chunks), 16000) == pytest.approx(440, abs=5)
     # in order, none missing: the simulator's phase-continuous tone from wherever listening began
     heard = b"".join(ears.chunks)
-    first = next(k for k in range(sim.robot.mic.published + 1) if tone(440, k * CHUNK, CHUNK, 16000) == ears.chunks[0])
+    mic = sim.robot.av_node.mic
+    first = next(k for k in range(mic.published + 1) if tone(440, k * CHUNK, CHUNK, 16000) == ears.chunks[0])
     assert heard == tone(440, first * CHUNK, len(heard) // 2, 16000)
     await ears.send({"type": "listen", "on": False})
     await ears.text(kind("listening", on=False))
@@ -67,7 +68,7 @@ async def test_viewers_may_neither_listen_nor_talk(link, sim, viewer):
         assert (await ws.receive_json_from(timeout=5))["code"] == "forbidden"
     await ws.send_to(bytes_data=tone(440, 0, CHUNK, 16000))
     assert (await ws.receive_json_from(timeout=5))["code"] == "not_talking"
-    assert sim.subscription_count(MIC) == 0 and not sim.robot.speaker.chunks
+    assert sim.subscription_count(MIC) == 0 and not sim.robot.av_node.speaker.chunks
     await ws.disconnect(timeout=5)
 
 
@@ -78,9 +79,9 @@ async def test_talk_reaches_the_robot_speakers_with_its_format_declared(link, si
     assert (await other.text(kind("talker", holder="otto")))["you"] is False
     assert (await watcher.text(kind("talker", holder="otto")))["you"] is False  # viewers see who talks too
     await talk_tone(mouth, 1000, 0.6)
-    await async_wait_until(lambda: len(sim.robot.speaker.chunks) == 30, what="30 chunks at the robot")
-    assert sim.robot.speaker.info == ri.speaker_info()
-    assert sim.robot.speaker.dominant_hz() == pytest.approx(1000, abs=5)
+    await async_wait_until(lambda: len(sim.robot.av_node.speaker.chunks) == 30, what="30 chunks at the robot")
+    assert sim.robot.av_node.speaker.info == ri.speaker_info()
+    assert sim.robot.av_node.speaker.dominant_hz() == pytest.approx(1000, abs=5)
     await mouth.send({"type": "talk", "on": False})
     await mouth.text(kind("talking", on=False, reason="stop"))
     await other.text(kind("talker", holder=None))
@@ -171,7 +172,8 @@ async def test_bad_chunks_are_refused_and_never_reach_the_robot(link, sim, opera
     refusal = await mouth.text(kind("error"))
     assert "faster than real time" in refusal["message"]
     await asyncio.sleep(0.05)
-    assert all(len(c.pcm) == 3200 for c in sim.robot.speaker.chunks) and len(sim.robot.speaker.chunks) < 12
+    chunks = sim.robot.av_node.speaker.chunks
+    assert all(len(c.pcm) == 3200 for c in chunks) and len(chunks) < 12
     await mouth.close()
 
 

@@ -37,7 +37,7 @@ def received(sim, key: str) -> list[dict[str, Any]]:
 
 def motor_calls(sim) -> int:
     """The simulated RosAria logs every motors service call it serves."""
-    log = sim.call(lambda: list(sim.robot.rosout_log))
+    log = sim.call(lambda: list(sim.robot.bus.rosout_log))
     return sum(1 for m in log if m["name"] == "/RosAria" and m["msg"].startswith("Motors "))
 
 

@@ -46,7 +46,7 @@ def strategy(request, settings, monkeypatch):
 
 
 def state_of(sim: SimThread) -> str:
-    return sim.call(lambda: sim.robot.sm.state)
+    return sim.call(lambda: sim.robot.controller.sm.state)
 
 
 async def restart(link, sim: SimThread, revived: list[SimThread]) -> SimThread:

@@ -54,7 +54,7 @@ def strategy(request, settings, monkeypatch):
 
 
 def sim_state(sim) -> str:
-    return sim.call(lambda: sim.robot.sm.state)
+    return sim.call(lambda: sim.robot.controller.sm.state)
 
 
 async def change(sim, mode: ri.Mode, start: str) -> None:
@@ -74,10 +74,10 @@ async def test_every_mode_is_reached_from_every_mode(link, sim, strategy):
 def enter(sim, events: tuple[str, ...]) -> str:
     """Fire ``events`` from idle in one go on the simulator's loop; the state they led to."""
     def fire() -> str:
-        assert sim.robot.sm.state == "idle", sim.robot.sm.state
+        assert sim.robot.controller.sm.state == "idle", sim.robot.controller.sm.state
         for event in events:
-            assert sim.robot.fire(event), event
-        return sim.robot.sm.state
+            assert sim.robot.controller.fire(event), event
+        return sim.robot.controller.sm.state
     return sim.call(fire)
 
 

@@ -167,7 +167,7 @@ async def test_it_records_the_microphone_only_under_a_policy_and_exports_it_as_w
     await async_wait_until(lambda: sim.subscription_count(ri.topic("battery_soc").name) > 0, timeout=10,
                            what="the recorder following the default policies")
     assert sim.subscription_count(mic) == 0
-    assert sim.robot.mic.published == 0
+    assert sim.robot.av_node.mic.published == 0
 
     await sync_to_async(policy_upsert)(topic=mic, msg_type=AUDIO, mode=Mode.EVERY)
     await _stored(mic, 50)  # a second of audio
@@ -187,7 +187,7 @@ async def test_it_records_the_microphone_only_under_a_policy_and_exports_it_as_w
     assert nframes == len(rows) * 320  # every stored 20 ms chunk, whole
     # Nothing the recorder took was lost on the way to the file.
     assert (recording.dropped, recording.oversize) == (0, 0)
-    assert 50 <= len(rows) <= sim.robot.mic.published
+    assert 50 <= len(rows) <= sim.robot.av_node.mic.published
     assert _dominant_hz(frames, 16000, 1) == pytest.approx(440, abs=5)
 
 
@@ -205,7 +205,7 @@ async def test_listening_and_talking_store_no_audio_without_a_recording_policy(r
     await ears.send(TALK)
     await ears.text(kind("talking", on=True))
     await talk_tone(ears, 500, 0.5)
-    await async_wait_until(lambda: len(sim.robot.speaker.chunks) >= 25, what="the talk at the robot")
+    await async_wait_until(lambda: len(sim.robot.av_node.speaker.chunks) >= 25, what="the talk at the robot")
     await ears.send({"type": "talk", "on": False})
     await ears.text(kind("talking", on=False))
     await ears.close()

@@ -37,14 +37,14 @@ async def test_the_graph_and_its_active_state_follow_the_simulators_machine(link
         # The graph is stored first, then the active state on it.
         await async_wait_until(lambda: stored(SMACH_ACTIVE_KEY)["version"] == graph["version"], timeout=5,
                                what="the active state on the whole graph")
-        sim.call(lambda: sim.robot.fire("behaviour_start"))
+        sim.call(lambda: sim.robot.controller.fire("behaviour_start"))
         await async_wait_until(lambda: leaves() == ["/SM_ROOT/behaviour/idle"], timeout=10, what="idle")
         active = stored(SMACH_ACTIVE_KEY)
         assert active["active"] == ["/SM_ROOT/behaviour", "/SM_ROOT/behaviour/idle"]
         assert {"bedtime", "suspend"} <= {t["event"] for t in active["transitions"]}
     finally:
         task.cancel()
-        sim.call(lambda: sim.robot.fire("suspend"))  # back where the simulator started
+        sim.call(lambda: sim.robot.controller.fire("suspend"))  # back where the simulator started
 
 
 @EITHER_ROS
@@ -56,12 +56,12 @@ async def test_without_introspection_state_change_tells_the_active_state(link, s
         await async_wait_until(lambda: stored(SMACH_GRAPH_KEY), timeout=15, what="the graph")
         # state_change is sent on transitions only: the one that ended the start-up may predate the link.
         await async_wait_until(lambda: sim.snapshot()["state"]["smach_state"] == "suspension", timeout=10)
-        sim.call(lambda: sim.robot.fire("manual_start"))
+        sim.call(lambda: sim.robot.controller.fire("manual_start"))
         await async_wait_until(lambda: leaves() == ["/SM_ROOT/manual"], timeout=10, what="manual")
         assert stored(SMACH_ACTIVE_KEY)["source"] == "state_change"
     finally:
         task.cancel()
-        sim.call(lambda: sim.robot.fire("aborted"))
+        sim.call(lambda: sim.robot.controller.fire("aborted"))
 
 
 def _diagnostic(name: str, level: int, message: str) -> dict:

@@ -65,7 +65,8 @@ async def test_log_lines_and_stamps_reach_the_product_in_one_model(link_either, 
     loop = asyncio.get_running_loop()
 
     async def logged() -> list[dict]:
-        await loop.run_in_executor(None, sim_either.call, lambda: sim_either.robot.rosout(8, "/cyborg_test", "boom"))
+        bus = sim_either.robot.bus
+        await loop.run_in_executor(None, sim_either.call, lambda: bus.rosout(8, "/cyborg_test", "boom"))
         return [m for m in await _stored_logs() if m["msg"] == "boom"]
 
     deadline = loop.time() + 15
@@ -131,7 +132,7 @@ async def test_a_wedged_socket_is_noticed_and_the_link_dials_again(link_either, 
     server = Raw(sim_either.url)  # another tool serves a service that never answers
     try:
         server.send({"op": "advertise_service", "service": "/silent", "type": "std_srvs/srv/Trigger"})
-        await async_wait_until(lambda: sim_either.call(lambda: "/silent" in sim_either.robot.broker.client_services),
+        await async_wait_until(lambda: sim_either.call(lambda: "/silent" in sim_either.robot.bus.client_services),
                                timeout=10, what="the silent service")
         since = link_either.dial.since
         reply = await link_either.requests.call(ri.Service("silent", "/silent", "std_srvs/srv/Trigger"), timeout=1.0)

@@ -149,7 +149,7 @@ async def test_it_replays_recent_log_lines_to_a_page_opened_later(link, sim, vie
 
     loop = asyncio.get_running_loop()
     for i in range(3):
-        await loop.run_in_executor(None, sim.call, lambda i=i: sim.robot.rosout(8, "/cyborg_test", f"boom {i}"))
+        await loop.run_in_executor(None, sim.call, lambda i=i: sim.robot.bus.rosout(8, "/cyborg_test", f"boom {i}"))
 
     async def stored():
         return [e["msg"]["msg"] for e in await get_store().aget_recent("rosout")]

@@ -47,7 +47,7 @@ async def test_a_large_map_is_decoded_off_the_event_loop_and_rendered_exactly(li
     msg = occupancy_grid(grid)
     assert len(str(msg["data"])) > LARGE_FRAME_BYTES
 
-    sim.call(lambda: sim.robot.broker.publish(ri.topic("map").name, msg, latch=True))
+    sim.call(lambda: sim.robot.bus.publish_name(ri.topic("map").name, msg, latch=True))
     meta = await async_wait_until(lambda: (m := map_meta()) and m["width"] == 1000 and m, timeout=20,
                                   what="the large map to be rendered")
 
@@ -69,7 +69,7 @@ async def test_a_large_frame_the_link_cannot_decode_is_logged_and_the_link_carri
     assert link.connected
     before = map_meta()["version"]
     grid = np.zeros((1000, 1100), dtype=np.int8)
-    sim.call(lambda: sim.robot.broker.publish(ri.topic("map").name, occupancy_grid(grid), latch=True))
+    sim.call(lambda: sim.robot.bus.publish_name(ri.topic("map").name, occupancy_grid(grid), latch=True))
     meta = await async_wait_until(lambda: (m := map_meta()) and m["version"] != before and m, timeout=20,
                                   what="the next map after the broken frame")
     assert meta["width"] == 1100

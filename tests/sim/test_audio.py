@@ -28,7 +28,7 @@ def test_the_microphone_publishes_its_tone_and_latched_format_only_while_someone
     _topic(ros, "audio_info").subscribe(info)
     info.wait(what="audio_info")
     assert info.items[0]["sample_rate"] == 16000 and info.items[0]["coding_format"] == "wave"
-    assert sim.robot.mic.published == 0
+    assert sim.robot.av_node.mic.published == 0
     topic = _topic(ros, "audio")
     topic.subscribe(mic)
     mic.wait(lambda items: len(items) >= 25, what="half a second of microphone")
@@ -37,9 +37,9 @@ def test_the_microphone_publishes_its_tone_and_latched_format_only_while_someone
     assert abs(dominant_hz(pcm, 16000) - 440) < 5
     topic.unsubscribe()
     wait_until(lambda: sim.subscription_count(ri.topic("audio").name) == 0)
-    published = sim.robot.mic.published
+    published = sim.robot.av_node.mic.published
     time.sleep(0.1)
-    assert sim.robot.mic.published == published
+    assert sim.robot.av_node.mic.published == published
 
 
 def test_an_mp3_microphone_publishes_one_continuous_mp3_stream_of_its_tone():
@@ -72,8 +72,8 @@ def test_the_speakers_keep_what_arrives_for_measuring(sim, ros):
         data = tone(1000, i * 320, 320, 16000)
         speaker.publish(roslibpy.Message({"data": base64.b64encode(data).decode()}))
         time.sleep(0.02)
-    wait_until(lambda: len(sim.robot.speaker.chunks) == 25)
-    heard = sim.robot.speaker
+    wait_until(lambda: len(sim.robot.av_node.speaker.chunks) == 25)
+    heard = sim.robot.av_node.speaker
     assert heard.info == ri.speaker_info()
     assert abs(heard.duration_s() - 0.5) < 1e-9
     assert abs(heard.dominant_hz() - 1000) < 5

@@ -6,7 +6,7 @@ from robot import interface as ri
 def _call(sim, key, **args):
     service = ri.service(key)
     robot = sim.robot
-    return sim.call(lambda: robot.bus.broker.services[service.name][1](args))
+    return sim.call(lambda: robot.bus.services[service.name][1](args))
 
 
 def test_publishers_are_nodes_rosapi_lists_and_every_named_nodes_topics_have_one(sim):

@@ -238,7 +238,7 @@ def test_it_echoes_a_client_publish_to_other_subscribers_and_records_its_arrival
 def test_it_relays_calls_to_a_service_a_client_advertised(sim, raw_client):
     provider, caller = raw_client(), raw_client()
     provider.send({"op": "advertise_service", "service": "/ui/ping", "type": "std_srvs/Trigger"})
-    wait_until(lambda: sim.call(lambda: "/ui/ping" in sim.robot.broker.client_services))
+    wait_until(lambda: sim.call(lambda: "/ui/ping" in sim.robot.bus.client_services))
     caller.send({"op": "call_service", "service": "/ui/ping", "id": "ask", "args": {}})
     request = provider.expect(lambda f: f.get("op") == "call_service")
     provider.send({"op": "service_response", "service": "/ui/ping", "id": request["id"],

@@ -117,7 +117,7 @@ def test_rosout_is_rcl_interfaces_log_with_levels_10_to_50(sim2, ros2, raw2):
     raw2.send({"op": "subscribe", "id": "old", "topic": "/rosout", "type": "rosgraph_msgs/Log"})
     logs = subscribe(ros2, "/rosout", "rcl_interfaces/msg/Log")
     wait_until(lambda: sim2.subscription_count("/rosout") == 1)
-    sim2.call(lambda: [sim2.robot.rosout(level, "/tester", f"level {level}") for level in (1, 2, 4, 8, 16)])
+    sim2.call(lambda: [sim2.robot.bus.rosout(level, "/tester", f"level {level}") for level in (1, 2, 4, 8, 16)])
     got = logs.wait(lambda items: [m for m in items if m["name"] == "tester"] if len(
         [m for m in items if m["name"] == "tester"]) == 5 else None, what="five log lines")
     assert [m["level"] for m in got] == [10, 20, 30, 40, 50]
@@ -198,7 +198,7 @@ def test_particles_are_a_nav2_particle_cloud(sim2, ros2):
 def _advertise_silent_service(sim: SimThread) -> Raw:
     server = Raw(sim.url)
     server.send({"op": "advertise_service", "service": "/silent", "type": "std_srvs/srv/Trigger"})
-    wait_until(lambda: sim.call(lambda: "/silent" in sim.robot.broker.client_services))
+    wait_until(lambda: sim.call(lambda: "/silent" in sim.robot.bus.client_services))
     return server
 
 
@@ -229,7 +229,7 @@ def test_with_services_in_new_threads_an_unanswered_call_wedges_nothing(sim2, ra
 
 def test_get_param_names_crashes_rosapi(sim2, raw2):
     raw2.send({"op": "call_service", "service": "/rosapi/get_param_names", "id": "crash"})
-    wait_until(lambda: sim2.call(lambda: "/rosapi/topics" not in sim2.robot.broker.services))
+    wait_until(lambda: sim2.call(lambda: "/rosapi/topics" not in sim2.robot.bus.services))
     other = Raw(sim2.url)
     try:
         assert other.call("/rosapi/topics")["values"] == "Service /rosapi/topics does not exist"

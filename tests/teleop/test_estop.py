@@ -36,7 +36,7 @@ def busy_robot(sim, link_thread):
     from robot.link.bus import publish
 
     wait_ready(sim)
-    sim.call(lambda: sim.robot.fire(ri.Event.MANUAL_START))
+    sim.call(lambda: sim.robot.controller.fire(ri.Event.MANUAL_START))
     publish("move_base_simple_goal", STAGE_GOAL)
     wait_state(sim, lambda s: s["navigating"] and s["smach_state"] == "manual" and s["v"] != 0, "goal under way")
     return sim
