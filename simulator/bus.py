@@ -151,12 +151,6 @@ class Bus:
         """The interface topic ``key`` as the simulated robot's ROS names it."""
         return ri.topic(key, self.dialect.ros)
 
-    def service(self, key: str) -> ri.Service:
-        return ri.service(key, self.dialect.ros)
-
-    def action(self, key: str) -> ri.Action:
-        return ri.action(key, self.dialect.ros)
-
     def publish(self, key: str, msg: dict[str, Any]) -> None:
         """Publish on the interface topic ``key`` (latched if the interface says so)."""
         t = self.topic(key)
@@ -246,7 +240,7 @@ class Bus:
 
     def answer(self, key: str, handler: ServiceHandler) -> None:
         """Answer the interface service ``key``; raise ``ServiceError`` to fail a call."""
-        s = self.service(key)
+        s = ri.service(key, self.dialect.ros)
         self.answer_name(s.name, s.type, handler)
 
     def answer_name(self, name: str, srv_type: str, handler: ServiceHandler) -> None:
