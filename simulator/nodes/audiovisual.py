@@ -21,50 +21,6 @@ import numpy as np
 
 from ..bus import Bus, SimNode
 
-
-class Audio:
-    """Utterances play one after another; each one is reported (its text) on the feedback topic
-    once it has been "spoken", after a time proportional to its length."""
-
-    def __init__(self, spoken: Callable[[str], None], played: Callable[[str], None],
-                 s_per_char: float = 0.03, min_s: float = 0.3, clip_s: float = 1.0) -> None:
-        self.spoken = spoken
-        self.played = played
-        self.s_per_char = s_per_char
-        self.min_s = min_s
-        self.clip_s = clip_s
-        self.queue: asyncio.Queue[str] = asyncio.Queue()
-        self.speaking: str | None = None
-        self.playing: str | None = None
-        self.done_count = 0
-
-    def say(self, text: str) -> None:
-        self.queue.put_nowait(text)
-
-    def pending(self) -> list[str]:
-        queued = list(self.queue._queue)  # type: ignore[attr-defined]  # read-only peek for introspection
-        return ([self.speaking] if self.speaking is not None else []) + queued
-
-    def play(self, clip: str) -> None:
-        self.playing = clip
-        asyncio.get_running_loop().call_later(self.clip_s, self._played, clip)
-
-    def _played(self, clip: str) -> None:
-        if self.playing == clip:
-            self.playing = None
-        self.played(clip)
-
-    async def run(self) -> None:
-        """Speak what is queued, one utterance after another (the node runs it on the bus)."""
-        while True:
-            text = await self.queue.get()
-            self.speaking = text
-            await asyncio.sleep(max(self.min_s, self.s_per_char * len(text)))
-            self.speaking = None
-            self.done_count += 1
-            self.spoken(text)
-
-
 # --- the microphone and the speakers (raw PCM S16LE, the audio_common formats) ---------------
 
 
@@ -181,13 +137,19 @@ class Speaker:
 
 
 class AudioVisualNode(SimNode):
+    """Utterances play one after another; each one is reported (its text) on the feedback topic
+    once it has been "spoken", after a time proportional to its length."""
+
     names = ("/cyborg_audio", "/cyborg_visual")
     publishes = ("tts_feedback", "playback_feedback", "audio", "audio_info")
 
     def __init__(self, tts_s_per_char: float, tts_min_s: float, clip_s: float, mic_tone_hz: float,
                  mic_coding: str = "wave") -> None:
-        self.audio = Audio(self._on_spoken, lambda clip: self.bus.publish("playback_feedback", {"data": clip}),
-                           tts_s_per_char, tts_min_s, clip_s)
+        self.s_per_char, self.min_s, self.clip_s = tts_s_per_char, tts_min_s, clip_s
+        self.queue: asyncio.Queue[str] = asyncio.Queue()
+        self.speaking: str | None = None
+        self.playing: str | None = None
+        self.done_count = 0
         self.mic = Microphone(lambda m: self.bus.publish("audio", m), lambda: self.bus.wants("audio"),
                               freq_hz=mic_tone_hz, coding=mic_coding)
         self.speaker = Speaker()
@@ -195,24 +157,47 @@ class AudioVisualNode(SimNode):
 
     def start(self, bus: Bus) -> None:
         super().start(bus)
-        bus.on("text_to_speech", lambda m: self.audio.say(m["data"]))
+        bus.on("text_to_speech", lambda m: self.say(m["data"]))
         bus.on("playback", self._playback)
         bus.on("domecontrol", self._domecontrol)
         bus.on("speaker", self.speaker.on_data)
         bus.on("speaker_info", self.speaker.on_info)
-        bus.spawn(self.audio.run())
+        bus.spawn(self._speak())
         if self.mic.freq_hz > 0:
             bus.spawn(self.mic.run())
         bus.publish("audio_info", self.mic.info())
 
     def _playback(self, m: dict[str, Any]) -> None:
         self.bus.rosout(2, "/cyborg_audio", f"Playing sound clip {m['data']}")
-        self.audio.play(m["data"])
+        self.play(m["data"])
+
+    def say(self, text: str) -> None:
+        self.queue.put_nowait(text)
+
+    def pending(self) -> list[str]:
+        queued = list(self.queue._queue)  # type: ignore[attr-defined]  # read-only peek for introspection
+        return ([self.speaking] if self.speaking is not None else []) + queued
+
+    def play(self, clip: str) -> None:
+        self.playing = clip
+        asyncio.get_running_loop().call_later(self.clip_s, self._played, clip)
+
+    def _played(self, clip: str) -> None:
+        if self.playing == clip:
+            self.playing = None
+        self.bus.publish("playback_feedback", {"data": clip})
+
+    async def _speak(self) -> None:
+        """Speak what is queued, one utterance after another."""
+        while True:
+            text = await self.queue.get()
+            self.speaking = text
+            await asyncio.sleep(max(self.min_s, self.s_per_char * len(text)))
+            self.speaking = None
+            self.done_count += 1
+            self.bus.rosout(2, "/cyborg_audio", f"Finished speaking: {text}")
+            self.bus.publish("tts_feedback", {"data": text})
 
     def _domecontrol(self, m: dict[str, Any]) -> None:
         self.dome_mode = m["data"]
         self.bus.rosout(2, "/cyborg_visual", f"Dome visual mode set to {m['data']}")
-
-    def _on_spoken(self, text: str) -> None:
-        self.bus.rosout(2, "/cyborg_audio", f"Finished speaking: {text}")
-        self.bus.publish("tts_feedback", {"data": text})

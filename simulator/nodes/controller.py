@@ -213,9 +213,9 @@ class ControllerNode(SimNode):
             if "visual" in preset:
                 self.av.dome_mode = preset["visual"]
             if "say" in preset:
-                self.av.audio.say(preset["say"])
+                self.av.say(preset["say"])
             if "clip" in preset:
-                self.av.audio.play(preset["clip"])
+                self.av.play(preset["clip"])
             if "pad" in preset:
                 self.emotion.feedback(*preset["pad"])
         if new in self.durations:
