@@ -65,21 +65,29 @@ def goal_id_from_uuid(uuid: Any) -> str:
     return raw.hex()
 
 
-def _stamps(value: Any) -> None:
-    """``{sec, nanosec}`` -> ``{secs, nsecs}`` wherever it is, and a header gets ROS 1's ``seq`` (0), in
-    place (the message is fresh from the wire and ours); lists of numbers (ranges, cells) are not walked."""
+def _restamp(value: Any, frm: tuple[str, str], to: tuple[str, str], seq: bool) -> None:
+    """Every stamp ``{frm}`` -> ``{to}`` wherever it is, and a header's ``seq`` given (0) or taken, in place
+    (the message is ours to change); lists of numbers (ranges, cells) are not walked."""
     if isinstance(value, dict):
-        if "nanosec" in value and len(value) == 2 and "sec" in value:
-            value["secs"], value["nsecs"] = value.pop("sec"), value.pop("nanosec")
+        if len(value) == 2 and frm[0] in value and frm[1] in value:
+            value[to[0]], value[to[1]] = value.pop(frm[0]), value.pop(frm[1])
             return
-        if "frame_id" in value and "stamp" in value and "seq" not in value:
-            value["seq"] = 0
+        if "frame_id" in value and "stamp" in value:
+            if seq:
+                value.setdefault("seq", 0)
+            else:
+                value.pop("seq", None)
         for item in value.values():
             if isinstance(item, dict | list):
-                _stamps(item)
+                _restamp(item, frm, to, seq)
     elif value and isinstance(value[0], dict | list):
         for item in value:
-            _stamps(item)
+            _restamp(item, frm, to, seq)
+
+
+def _stamps(value: Any) -> None:
+    """``{sec, nanosec}`` -> ``{secs, nsecs}``, and a header gets ROS 1's ``seq`` (0)."""
+    _restamp(value, ("sec", "nanosec"), ("secs", "nsecs"), seq=True)
 
 
 def _log(msg: dict[str, Any]) -> dict[str, Any]:
@@ -123,19 +131,8 @@ LOG_LEVEL_TO_ROS2 = {v: k for k, v in LOG_LEVEL_FROM_ROS2.items()}
 
 
 def _ros2_stamps(value: Any) -> None:
-    """``{secs, nsecs}`` -> ``{sec, nanosec}`` and headers without ``seq``, in place: ``_stamps`` undone."""
-    if isinstance(value, dict):
-        if "nsecs" in value and len(value) == 2 and "secs" in value:
-            value["sec"], value["nanosec"] = value.pop("secs"), value.pop("nsecs")
-            return
-        if "frame_id" in value and "stamp" in value:
-            value.pop("seq", None)
-        for item in value.values():
-            if isinstance(item, dict | list):
-                _ros2_stamps(item)
-    elif value and isinstance(value[0], dict | list):
-        for item in value:
-            _ros2_stamps(item)
+    """``{secs, nsecs}`` -> ``{sec, nanosec}`` and headers without ``seq``: ``_stamps`` undone."""
+    _restamp(value, ("secs", "nsecs"), ("sec", "nanosec"), seq=False)
 
 
 def _ros2_log(msg: dict[str, Any]) -> dict[str, Any]:

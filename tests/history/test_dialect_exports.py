@@ -38,7 +38,7 @@ async def test_the_robots_log_is_recorded_and_exported_as_the_robot_sent_it(reco
     await async_wait_until(lambda: rosout.name in recording.every and sim.subscription_count(rosout.name) > 0,
                            timeout=10, what="the log recorded")
 
-    sim.call(lambda: sim.robot.rosout(8, "/move_base", "planner failed"))
+    sim.call(lambda: sim.robot.bus.rosout(8, "/move_base", "planner failed"))
     kept = sync_to_async(lambda: [s for s in Sample.objects.filter(topic=rosout.name)
                                   if s.data["msg"] == "planner failed"])
     deadline = time.monotonic() + 10
@@ -80,7 +80,7 @@ async def test_a_ros2_robot_records_the_default_topics_under_its_own_names_and_t
                                                                           "interval_s": interval_s})
 
     await sync_to_async(as_bootstrap_makes_them)()
-    await async_wait_until(lambda: link.ros_version == ri.ROS2, timeout=10, what="the link to find ROS 2")
+    await async_wait_until(lambda: link.dial.ros_version == ri.ROS2, timeout=10, what="the link to find ROS 2")
     plan, status, rosout = (ri.topic(key, ri.ROS2) for key in ("plan", "move_base_status", "rosout"))
     await async_wait_until(lambda: {plan.name, status.name} <= recording.periodic and rosout.name in recording.every
                            and sim.subscription_count(status.name) > 0,
@@ -89,7 +89,7 @@ async def test_a_ros2_robot_records_the_default_topics_under_its_own_names_and_t
     assert types[plan.name] == "nav_msgs/msg/Path" and types[status.name] == "action_msgs/msg/GoalStatusArray"
     assert types[rosout.name] == "rcl_interfaces/msg/Log"
 
-    sim.call(lambda: sim.robot.rosout(8, "/move_base", "planner failed on ROS 2"))
+    sim.call(lambda: sim.robot.bus.rosout(8, "/move_base", "planner failed on ROS 2"))
     recorded = sync_to_async(lambda: Sample.objects.filter(topic=rosout.name, msg_type=rosout.type,
                                                            data__msg="planner failed on ROS 2").exists())
     deadline = time.monotonic() + 15
