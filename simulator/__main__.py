@@ -57,7 +57,10 @@ async def serve(robot: SimRobot) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
+        # A signal ignored on entry stays ignored: a script's background child (scripts/run.sh) leaves
+        # a Ctrl-C to the script, which stops its children in order.
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            loop.add_signal_handler(sig, stop.set)
     await robot.start()
     print(f"Simulator listening on {robot.url} (video on http://{robot.host}:{robot.video_port})", flush=True)
     await stop.wait()

@@ -135,6 +135,10 @@ def _push_and_read(page, stack, hand: _Hand, dx: float, dy: float, until) -> lis
     finally:
         hand.let_go()
     expect(page.locator("#cmd-vel")).to_have_attribute("data-linear", "0")
+    # The stop at the robot too: on a loaded machine this push's last Twists may still be on their way,
+    # and the next push must not count them as its own.
+    wait_until(lambda: (msgs := received(stack)[start:]) and not _moving_twists_since(stack, start + len(msgs) - 1),
+               what="the stop at the robot")
     return _moving_twists_since(stack, start)
 
 

@@ -93,7 +93,8 @@ def test_a_recorder_taking_over_goes_on_from_the_last_sample_stored(transactiona
     import types
 
     policy_upsert(topic=PERIODIC, msg_type=TYPE, mode=Mode.PERIODIC, interval_s=10)
-    link = types.SimpleNamespace(subscribe=lambda *a, **k: None, unsubscribe=lambda *a, **k: None)
+    link = types.SimpleNamespace(subscriptions=types.SimpleNamespace(subscribe=lambda *a, **k: None,
+                                                               unsubscribe=lambda *a, **k: None))
     start = time.time() - 60
     first = Recorder()
     async_to_sync(first.reload)(link)
