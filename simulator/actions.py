@@ -19,8 +19,7 @@ from typing import Any
 from robot import interface as ri
 
 from . import messages
-from .bus import Bus
-from .protocol import ActionEndpoint, Client
+from .bus import ActionEndpoint, Bus, Peer
 
 PENDING, ACTIVE, PREEMPTED, SUCCEEDED, ABORTED, REJECTED = 0, 1, 2, 3, 4, 5
 TERMINAL = frozenset({PREEMPTED, SUCCEEDED, ABORTED, REJECTED, 8, 9})
@@ -156,7 +155,7 @@ class Ros2Action(ActionServer, ActionEndpoint):
                  feedback_out: Callable[[Goal, dict[str, Any]], dict[str, Any]] = lambda goal, f: f) -> None:
         super().__init__(name, action_type, on_goal, on_cancel)
         self.goal_in, self.feedback_out = goal_in, feedback_out
-        self.owners: dict[str, tuple[Client, Any]] = {}  # goal id -> the client and op id that sent it
+        self.owners: dict[str, tuple[Peer, Any]] = {}  # goal id -> the client and op id that sent it
         self.status_topic = f"{name}/_action/status"
 
     def install(self, bus: Bus) -> None:
@@ -166,13 +165,13 @@ class Ros2Action(ActionServer, ActionEndpoint):
         bus.declare(self.status_topic, ri.ACTION_STATUS_TYPE)
         bus.answer_name(f"{self.name}/_action/cancel_goal", ri.ACTION_CANCEL_TYPE, self.cancel_service_call)
 
-    def send_goal(self, client: Client, op_id: Any, args: dict[str, Any]) -> None:
+    def send_goal(self, client: Peer, op_id: Any, args: dict[str, Any]) -> None:
         goal = messages.normalize(f"{self.type}Goal", args)
         gid = uuid.uuid4().hex
         self.owners[gid] = (client, op_id)
         self.receive_goal({"goal_id": {"stamp": messages.stamp(), "id": gid}, "goal": self.goal_in(goal)})
 
-    def cancel_goal(self, client: Client, op_id: Any) -> None:
+    def cancel_goal(self, client: Peer, op_id: Any) -> None:
         for gid, owner in list(self.owners.items()):
             if owner == (client, op_id):
                 self.receive_cancel({"id": gid, "stamp": {"secs": 0, "nsecs": 0}})

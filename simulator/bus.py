@@ -16,14 +16,50 @@ import math
 import time
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from robot import interface as ri
 
 from .messages import ROS1, Dialect
 
-if TYPE_CHECKING:
-    from .protocol import ActionEndpoint, Client, Subscription
+
+class Peer(Protocol):
+    """A rosbridge client as the graph holds it (``protocol.Client``)."""
+
+    id: int
+    address: str
+    connected_at: float
+
+    def reply(self, frame: dict[str, Any]) -> None: ...
+
+    def respond(self, mid: Any, service: str, values: Any, ok: bool) -> None: ...
+
+    def release(self, what: Any) -> None: ...
+
+
+class Delivery(Protocol):
+    """One client's subscription as the graph feeds it (``protocol.Subscription``)."""
+
+    raw: bool
+    params: dict[Any, tuple[int, int]]
+
+    def offer(self, frame: str | bytes) -> None: ...
+
+    def update(self) -> None: ...
+
+    def stop(self) -> None: ...
+
+
+class ActionEndpoint:
+    """A ROS 2 action server as rosbridge's action ops reach it (``actions.Ros2Action``)."""
+
+    type: str
+
+    def send_goal(self, client: Peer, op_id: Any, args: dict[str, Any]) -> None:
+        raise NotImplementedError
+
+    def cancel_goal(self, client: Peer, op_id: Any) -> None:
+        raise NotImplementedError
 
 log = logging.getLogger("simulator")
 
@@ -130,7 +166,7 @@ class Bus:
         self._warned: dict[str, float] = {}
         self.actions: dict[str, ActionEndpoint] = {}
         self.types: dict[str, str] = {}
-        self.subs: dict[str, dict[int, Subscription]] = collections.defaultdict(dict)
+        self.subs: dict[str, dict[int, Delivery]] = collections.defaultdict(dict)
         self.latched: dict[str, str] = {}
         self.lazy_latched: dict[str, Callable[[], dict[str, Any]]] = {}  # built for the first subscriber
         self.handlers: dict[str, list[Handler]] = collections.defaultdict(list)
@@ -138,12 +174,12 @@ class Bus:
             lambda: collections.deque(maxlen=RECEIVED_KEEP))
         self.received_counts: collections.Counter[str] = collections.Counter()
         self.services: dict[str, tuple[str, ServiceHandler]] = {}
-        self.client_services: dict[str, Client] = {}  # service -> the client that advertised it
-        self.clients: dict[int, Client] = {}
+        self.client_services: dict[str, Peer] = {}  # service -> the client that advertised it
+        self.clients: dict[int, Peer] = {}
         self.publishers: dict[str, set[int]] = collections.defaultdict(set)
         self.client_ids = itertools.count()
         self.call_ids = (f"service_request:{n}" for n in itertools.count())  # calls relayed to a client
-        self.pending_calls: dict[str, tuple[Client, Any, str]] = {}
+        self.pending_calls: dict[str, tuple[Peer, Any, str]] = {}
 
     # --- topics ------------------------------------------------------------------------
 
@@ -228,7 +264,7 @@ class Bus:
         if not self.subs[name]:
             del self.subs[name]
 
-    def disconnect(self, client: Client) -> None:
+    def disconnect(self, client: Peer) -> None:
         self.clients.pop(client.id, None)
         for name in list(self.subs):
             self.unsubscribe(client.id, name)

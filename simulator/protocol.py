@@ -90,18 +90,6 @@ class Subscription:
         self.pump = self.queue = self.wake = None
 
 
-class ActionEndpoint:
-    """A ROS 2 action server as rosbridge's action ops reach it (``actions.Ros2Action``)."""
-
-    type: str
-
-    def send_goal(self, client: Client, op_id: Any, args: dict[str, Any]) -> None:
-        raise NotImplementedError
-
-    def cancel_goal(self, client: Client, op_id: Any) -> None:
-        raise NotImplementedError
-
-
 def _check(frame: dict[str, Any], spec: list[tuple[bool, str, type]]) -> None:
     # rosbridge_library's Capability.basic_type_check (isinstance, so bool passes for int).
     for mandatory, name, expected in spec:
