@@ -30,6 +30,12 @@ def _listening(port: int) -> bool:
         return s.connect_ex(("127.0.0.1", port)) == 0
 
 
+def _as_from_a_terminal() -> None:
+    """Ctrl-C at its default, as in a terminal: an xdist worker ignores SIGINT, its children would too,
+    and a shell cannot trap a signal ignored on entry."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @contextlib.contextmanager
 def _run_sh() -> Iterator[tuple[subprocess.Popen, Path, tuple[int, int, int]]]:
     """scripts/run.sh on free ports with a fresh VAR_DIR, in a session of its own (a signal goes to the
@@ -43,7 +49,8 @@ def _run_sh() -> Iterator[tuple[subprocess.Popen, Path, tuple[int, int, int]]]:
     with out.open("w") as log:
         run = subprocess.Popen(["bash", "scripts/run.sh", BIN, str(web), str(sim), str(video),
                                 f"ws://127.0.0.1:{sim}", f"http://127.0.0.1:{video}"],
-                               cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+                               cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                               preexec_fn=_as_from_a_terminal)
         try:
             yield run, out, (web, sim, video)
         finally:
